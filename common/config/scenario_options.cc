@@ -1,0 +1,539 @@
+#include "common/config/scenario_options.h"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace mrslam::common {
+namespace {
+
+// A YAML mapping being read: remembers which keys were used so that the rest can be reported
+// as unknown, and names every key by its full path in errors.
+class Section {
+ public:
+  Section(YAML::Node node, std::string path) : node_(std::move(node)), path_(std::move(path)) {
+    if (node_ && !node_.IsNull() && !node_.IsMap()) {
+      throw ScenarioError("scenario key '" + PathOr("<root>") + "' must be a mapping");
+    }
+  }
+  ~Section() = default;
+  Section(const Section&) = delete;
+  Section& operator=(const Section&) = delete;
+
+  bool Has(const std::string& key) {
+    used_.insert(key);
+    return node_ && node_.IsMap() && node_[key] && !node_[key].IsNull();
+  }
+  std::string KeyPath(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  template <typename T>
+  T Get(const std::string& key, const T& fallback) {
+    return Has(key) ? Convert<T>(node_[key], KeyPath(key)) : fallback;
+  }
+  template <typename T>
+  T Require(const std::string& key) {
+    if (!Has(key)) throw ScenarioError("scenario key '" + KeyPath(key) + "' is missing (required)");
+    return Convert<T>(node_[key], KeyPath(key));
+  }
+  YAML::Node Raw(const std::string& key) {
+    used_.insert(key);
+    return node_ ? node_[key] : YAML::Node();
+  }
+  Pose2 GetPose(const std::string& key, const Pose2& fallback) {
+    if (!Has(key)) return fallback;
+    const auto v = Convert<std::vector<double>>(node_[key], KeyPath(key));
+    if (v.size() != 3) {
+      throw ScenarioError("scenario key '" + KeyPath(key) +
+                          "' must be a list of 3 numbers [x_m, y_m, heading_rad], got " +
+                          std::to_string(v.size()));
+    }
+    return {v[0], v[1], WrapAngle(v[2])};
+  }
+  Eigen::Vector3d GetVector3(const std::string& key, const Eigen::Vector3d& fallback) {
+    if (!Has(key)) return fallback;
+    const auto v = Convert<std::vector<double>>(node_[key], KeyPath(key));
+    if (v.size() != 3) {
+      throw ScenarioError("scenario key '" + KeyPath(key) + "' must be a list of 3 numbers");
+    }
+    return {v[0], v[1], v[2]};
+  }
+  template <typename E>
+  E GetEnum(const std::string& key, E fallback, const std::map<std::string, E>& names) {
+    if (!Has(key)) return fallback;
+    const auto s = Convert<std::string>(node_[key], KeyPath(key));
+    const auto it = names.find(s);
+    if (it != names.end()) return it->second;
+    std::string allowed;
+    for (const auto& [name, value] : names) allowed += (allowed.empty() ? "" : ", ") + name;
+    throw ScenarioError("scenario key '" + KeyPath(key) + "' = '" + s + "' is not one of: " + allowed);
+  }
+  // Throws for the first key of this mapping that was never read.
+  void RejectUnknownKeys() const {
+    if (!node_ || !node_.IsMap()) return;
+    for (const auto& kv : node_) {
+      const auto key = kv.first.as<std::string>();
+      if (used_.count(key) == 0) {
+        throw ScenarioError("scenario key '" + KeyPath(key) + "' is unknown");
+      }
+    }
+  }
+
+ private:
+  std::string PathOr(const std::string& fallback) const { return path_.empty() ? fallback : path_; }
+
+  template <typename T>
+  static T Convert(const YAML::Node& n, const std::string& path) {
+    try {
+      return n.as<T>();
+    } catch (const YAML::Exception&) {
+      std::ostringstream value;
+      value << n;
+      throw ScenarioError("scenario key '" + path + "' = '" + value.str() + "' is not " +
+                          TypeName<T>());
+    }
+  }
+  template <typename T>
+  static std::string TypeName() {
+    if constexpr (std::is_same_v<T, bool>) return "a boolean";
+    else if constexpr (std::is_integral_v<T>) return "an integer";
+    else if constexpr (std::is_floating_point_v<T>) return "a number";
+    else if constexpr (std::is_same_v<T, std::string>) return "a string";
+    else return "a list of numbers";
+  }
+
+  YAML::Node node_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+YAML::Node RequireSequence(Section& s, const std::string& key) {
+  YAML::Node n = s.Raw(key);
+  if (!n || n.IsNull()) return YAML::Node(YAML::NodeType::Sequence);
+  if (!n.IsSequence()) throw ScenarioError("scenario key '" + s.KeyPath(key) + "' must be a list");
+  return n;
+}
+
+LandmarkMotionOptions ParseLandmarkMotion(const YAML::Node& node, const std::string& path) {
+  Section s(node, path);
+  LandmarkMotionOptions m;
+  m.model = s.GetEnum<LandmarkMotionModel>(
+      "model", LandmarkMotionModel::kStatic,
+      {{"static", LandmarkMotionModel::kStatic},
+       {"unicycle", LandmarkMotionModel::kUnicycle},
+       {"cardinal", LandmarkMotionModel::kCardinal},
+       {"constant_velocity", LandmarkMotionModel::kConstantVelocity}});
+  m.v_mps = s.Get("v_mps", 0.0);
+  m.w_radps = s.Get("w_radps", 0.0);
+  m.speed_mps = s.Get("speed_mps", 0.0);
+  m.reverse_every_steps = s.Get("reverse_every_steps", 20);
+  const auto vel = s.Get("velocity_mps", std::vector<double>{0.0, 0.0});
+  if (vel.size() != 2) throw ScenarioError("scenario key '" + s.KeyPath("velocity_mps") + "' must be [vx, vy]");
+  m.velocity_mps = {vel[0], vel[1]};
+  s.RejectUnknownKeys();
+  return m;
+}
+
+ControlOptions ParseControl(const YAML::Node& node, const std::string& path) {
+  Section s(node, path);
+  ControlOptions c;
+  c.type = s.GetEnum<ControlType>("type", ControlType::kConstant,
+                                  {{"constant", ControlType::kConstant},
+                                   {"schedule", ControlType::kSchedule},
+                                   {"arc", ControlType::kArc}});
+  c.v_mps = s.Get("v_mps", 0.0);
+  c.w_radps = s.Get("w_radps", 0.0);
+  const YAML::Node segs = RequireSequence(s, "segments");
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    Section seg(segs[i], s.KeyPath("segments") + "." + std::to_string(i));
+    c.segments.push_back({seg.Get("v_mps", 0.0), seg.Get("w_radps", 0.0),
+                          seg.Require<double>("duration_s")});
+    seg.RejectUnknownKeys();
+  }
+  c.radius_m = s.Get("radius_m", 1.0);
+  c.speed_mps = s.Get("speed_mps", 0.0);
+  c.sweep_rad = s.Get("sweep_rad", 0.0);
+  c.turn_left = s.GetEnum<bool>("turn", true, {{"left", true}, {"right", false}});
+  s.RejectUnknownKeys();
+  return c;
+}
+
+}  // namespace
+
+int ScenarioOptions::RobotIndex(const std::string& id) const {
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    if (robots[i].id == id) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
+  if (!root || !root.IsMap()) throw ScenarioError("scenario must be a YAML mapping at the top level");
+  Section top(root, "");
+  ScenarioOptions o;
+  o.name = top.Require<std::string>("name");
+  o.seed = top.Get<std::uint64_t>("seed", 1);
+
+  {
+    Section run(top.Raw("run"), "run");
+    o.run.mode = run.GetEnum<RunMode>("mode", RunMode::kLockstep,
+                                      {{"lockstep", RunMode::kLockstep}, {"realtime", RunMode::kRealtime}});
+    o.run.realtime_factor = run.Get("realtime_factor", o.run.realtime_factor);
+    o.run.steps = run.Require<int>("steps");
+    o.run.dt_s = run.Require<double>("dt_s");
+    o.run.ack_timeout_s = run.Get("ack_timeout_s", o.run.ack_timeout_s);
+    o.run.domain = run.Get("domain", o.run.domain);
+    run.RejectUnknownKeys();
+  }
+
+  const YAML::Node lms = RequireSequence(top, "landmarks");
+  for (std::size_t i = 0; i < lms.size(); ++i) {
+    const std::string path = "landmarks." + std::to_string(i);
+    Section s(lms[i], path);
+    LandmarkOptions l;
+    l.id = s.Get("id", static_cast<int>(i) + 1);
+    if (!s.Has("pose")) throw ScenarioError("scenario key '" + path + ".pose' is missing (required)");
+    l.pose = s.GetPose("pose", {});
+    l.motion = ParseLandmarkMotion(s.Raw("motion"), path + ".motion");
+    s.RejectUnknownKeys();
+    o.landmarks.push_back(l);
+  }
+
+  if (top.Has("landmark_field")) {
+    Section f(top.Raw("landmark_field"), "landmark_field");
+    auto& lf = o.landmark_field;
+    lf.enabled = true;
+    lf.count = f.Require<int>("count");
+    const auto area = f.Get("area_m", std::vector<double>{-10, -10, 10, 10});
+    if (area.size() != 4) throw ScenarioError("scenario key 'landmark_field.area_m' must be [x_min, y_min, x_max, y_max]");
+    lf.area_m = {area[0], area[1], area[2], area[3]};
+    lf.jitter_m = f.Get("jitter_m", lf.jitter_m);
+    lf.moving_fraction = f.Get("moving_fraction", lf.moving_fraction);
+    lf.speed_mps = f.Get("speed_mps", lf.speed_mps);
+    lf.reverse_every_steps = f.Get("reverse_every_steps", lf.reverse_every_steps);
+    lf.first_id = f.Get("first_id", lf.first_id);
+    f.RejectUnknownKeys();
+  }
+
+  const YAML::Node robots = RequireSequence(top, "robots");
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    const std::string path = "robots." + std::to_string(i);
+    Section s(robots[i], path);
+    RobotOptions r;
+    r.id = s.Require<std::string>("id");
+    if (!s.Has("pose")) throw ScenarioError("scenario key '" + path + ".pose' is missing (required)");
+    r.initial_pose = s.GetPose("pose", {});
+    r.frame_in_world = s.GetPose("frame", r.initial_pose);
+    r.control = ParseControl(s.Raw("control"), path + ".control");
+    s.RejectUnknownKeys();
+    o.robots.push_back(r);
+  }
+
+  {
+    Section sensors(top.Raw("sensors"), "sensors");
+    {
+      Section l(sensors.Raw("lidar"), "sensors.lidar");
+      auto& d = o.sensors.lidar;
+      d.max_range_m = l.Get("max_range_m", d.max_range_m);
+      d.min_range_m = l.Get("min_range_m", d.min_range_m);
+      d.fov_rad = l.Get("fov_rad", d.fov_rad);
+      d.range_noise_sd_m = l.Get("range_noise_sd_m", d.range_noise_sd_m);
+      d.bearing_noise_sd_rad = l.Get("bearing_noise_sd_rad", d.bearing_noise_sd_rad);
+      d.report_identity = l.Get("report_identity", d.report_identity);
+      d.robot_detection_range_m = l.Get("robot_detection_range_m", d.robot_detection_range_m);
+      d.detection_probability = l.Get("detection_probability", d.detection_probability);
+      l.RejectUnknownKeys();
+    }
+    {
+      Section m(sensors.Raw("imu"), "sensors.imu");
+      auto& d = o.sensors.imu;
+      d.enabled = m.Get("enabled", d.enabled);
+      d.readings_per_step = m.Get("readings_per_step", d.readings_per_step);
+      d.gyro_noise_sd_radps = m.Get("gyro_noise_sd_radps", d.gyro_noise_sd_radps);
+      d.accel_noise_sd_mps2 = m.Get("accel_noise_sd_mps2", d.accel_noise_sd_mps2);
+      m.RejectUnknownKeys();
+    }
+    {
+      Section m(sensors.Raw("odometry"), "sensors.odometry");
+      auto& d = o.sensors.odometry;
+      d.v_noise_sd_mps = m.Get("v_noise_sd_mps", d.v_noise_sd_mps);
+      d.w_noise_sd_radps = m.Get("w_noise_sd_radps", d.w_noise_sd_radps);
+      m.RejectUnknownKeys();
+    }
+    sensors.RejectUnknownKeys();
+  }
+
+  {
+    Section n(top.Raw("noise"), "noise");
+    o.noise.robot_process_var = n.GetVector3("robot_process_var", o.noise.robot_process_var);
+    o.noise.landmark_process_var = n.GetVector3("landmark_process_var", o.noise.landmark_process_var);
+    n.RejectUnknownKeys();
+  }
+
+  {
+    Section f(top.Raw("filter"), "filter");
+    auto& d = o.filter;
+    d.type = f.Get("type", d.type);
+    d.particles = f.Get("particles", d.particles);
+    d.motion_source = f.GetEnum<MotionSource>(
+        "motion_source", d.motion_source, {{"odometry", MotionSource::kOdometry}, {"imu", MotionSource::kImu}});
+    d.proposal = f.GetEnum<Proposal>("proposal", d.proposal,
+                                     {{"motion", Proposal::kMotion}, {"measurement", Proposal::kMeasurement}});
+    d.association = f.GetEnum<Association>(
+        "association", d.association,
+        {{"mahalanobis", Association::kMahalanobis}, {"euclidean", Association::kEuclidean}});
+    d.gate_probability = f.Get("gate_probability", d.gate_probability);
+    d.new_landmark_probability = f.Get("new_landmark_probability", d.new_landmark_probability);
+    d.euclidean_gate = f.Get("euclidean_gate", d.euclidean_gate);
+    d.landmark_kinematics = f.GetEnum<LandmarkKinematics>(
+        "landmark_kinematics", d.landmark_kinematics,
+        {{"static", LandmarkKinematics::kStatic},
+         {"known_candidates", LandmarkKinematics::kKnownCandidates},
+         {"constant_turn_rate", LandmarkKinematics::kConstantTurnRate}});
+    const YAML::Node kk = RequireSequence(f, "known_kinematics");
+    for (std::size_t i = 0; i < kk.size(); ++i) {
+      Section k(kk[i], "filter.known_kinematics." + std::to_string(i));
+      d.known_kinematics.push_back({k.Require<double>("v_mps"), k.Require<double>("w_radps")});
+      k.RejectUnknownKeys();
+    }
+    d.max_landmark_speed_mps = f.Get("max_landmark_speed_mps", d.max_landmark_speed_mps);
+    d.confirm_sightings = f.Get("confirm_sightings", d.confirm_sightings);
+    d.drop_after_misses = f.Get("drop_after_misses", d.drop_after_misses);
+    d.resample_ess_fraction = f.Get("resample_ess_fraction", d.resample_ess_fraction);
+    d.resample_every_step = f.Get("resample_every_step", d.resample_every_step);
+    f.RejectUnknownKeys();
+  }
+
+  {
+    Section r(top.Raw("rendezvous"), "rendezvous");
+    auto& d = o.rendezvous;
+    d.enable_from_step = r.Get("enable_from_step", d.enable_from_step);
+    d.window_steps = r.Get("window_steps", d.window_steps);
+    d.min_interval_steps = r.Get("min_interval_steps", d.min_interval_steps);
+    r.RejectUnknownKeys();
+  }
+
+  top.RejectUnknownKeys();
+  return o;
+}
+
+namespace {
+
+// Collects the first violated rule as "scenario key 'k' = v: rule".
+class Checker {
+ public:
+  explicit Checker(std::string* error) : error_(error) {}
+  template <typename T>
+  bool Check(bool ok, const std::string& key, const T& value, const std::string& rule) {
+    if (!ok && failed_ == false) {
+      failed_ = true;
+      std::ostringstream s;
+      s << "scenario key '" << key << "' = " << value << ": " << rule;
+      if (error_ != nullptr) *error_ = s.str();
+    }
+    return ok;
+  }
+  bool ok() const { return !failed_; }
+
+ private:
+  std::string* error_;
+  bool failed_ = false;
+};
+
+bool Finite(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.heading); }
+std::string PoseText(const Pose2& p) {
+  std::ostringstream s;
+  s << "[" << p.x << ", " << p.y << ", " << p.heading << "]";
+  return s.str();
+}
+
+}  // namespace
+
+bool ScenarioOptions::IsValid(std::string* error) const {
+  Checker c(error);
+  c.Check(!name.empty(), "name", "''", "must not be empty");
+  c.Check(run.steps >= 1, "run.steps", run.steps, "must be at least 1");
+  c.Check(run.dt_s > 0.0 && std::isfinite(run.dt_s), "run.dt_s", run.dt_s, "must be positive");
+  c.Check(run.realtime_factor > 0.0, "run.realtime_factor", run.realtime_factor, "must be positive");
+  c.Check(run.ack_timeout_s > 0.0, "run.ack_timeout_s", run.ack_timeout_s, "must be positive");
+  c.Check(run.domain >= 0 && run.domain <= 232, "run.domain", run.domain, "must be in 0..232");
+  c.Check(!robots.empty(), "robots", "[]", "at least one robot is required");
+
+  std::set<std::string> robot_ids;
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    const auto& r = robots[i];
+    const std::string p = "robots." + std::to_string(i);
+    c.Check(!r.id.empty(), p + ".id", "''", "must not be empty");
+    c.Check(r.id.find_first_of(" /.\t") == std::string::npos, p + ".id", r.id,
+            "must not contain spaces, '/' or '.'");
+    c.Check(r.id != "world", p + ".id", r.id, "'world' is reserved");
+    c.Check(robot_ids.insert(r.id).second, p + ".id", r.id, "duplicate robot id");
+    c.Check(Finite(r.initial_pose), p + ".pose", PoseText(r.initial_pose), "must be finite");
+    c.Check(Finite(r.frame_in_world), p + ".frame", PoseText(r.frame_in_world), "must be finite");
+    const auto& ct = r.control;
+    c.Check(std::isfinite(ct.v_mps) && std::isfinite(ct.w_radps), p + ".control", ct.v_mps,
+            "v_mps and w_radps must be finite");
+    for (std::size_t k = 0; k < ct.segments.size(); ++k) {
+      c.Check(ct.segments[k].duration_s > 0.0, p + ".control.segments." + std::to_string(k) + ".duration_s",
+              ct.segments[k].duration_s, "must be positive");
+    }
+    if (ct.type == ControlType::kSchedule) {
+      c.Check(!ct.segments.empty(), p + ".control.segments", "[]", "a schedule needs at least one segment");
+    }
+    if (ct.type == ControlType::kArc) {
+      c.Check(ct.radius_m > 0.0, p + ".control.radius_m", ct.radius_m, "must be positive");
+      c.Check(ct.sweep_rad >= 0.0, p + ".control.sweep_rad", ct.sweep_rad, "must not be negative");
+    }
+  }
+
+  std::set<int> landmark_ids;
+  for (std::size_t i = 0; i < landmarks.size(); ++i) {
+    const auto& l = landmarks[i];
+    const std::string p = "landmarks." + std::to_string(i);
+    c.Check(l.id >= 0, p + ".id", l.id, "must not be negative");
+    c.Check(landmark_ids.insert(l.id).second, p + ".id", l.id, "duplicate landmark id");
+    c.Check(Finite(l.pose), p + ".pose", PoseText(l.pose), "must be finite");
+    if (l.motion.model == LandmarkMotionModel::kCardinal) {
+      c.Check(l.motion.reverse_every_steps >= 1, p + ".motion.reverse_every_steps",
+              l.motion.reverse_every_steps, "must be at least 1");
+      c.Check(l.motion.speed_mps >= 0.0, p + ".motion.speed_mps", l.motion.speed_mps, "must not be negative");
+    }
+  }
+  if (landmark_field.enabled) {
+    const auto& f = landmark_field;
+    c.Check(f.count >= 1, "landmark_field.count", f.count, "must be at least 1");
+    c.Check(f.area_m[2] > f.area_m[0] && f.area_m[3] > f.area_m[1], "landmark_field.area_m",
+            f.area_m.transpose(), "x_max > x_min and y_max > y_min");
+    c.Check(f.jitter_m >= 0.0, "landmark_field.jitter_m", f.jitter_m, "must not be negative");
+    c.Check(f.moving_fraction >= 0.0 && f.moving_fraction <= 1.0, "landmark_field.moving_fraction",
+            f.moving_fraction, "must be in [0, 1]");
+    c.Check(f.speed_mps >= 0.0, "landmark_field.speed_mps", f.speed_mps, "must not be negative");
+    c.Check(f.reverse_every_steps >= 1, "landmark_field.reverse_every_steps", f.reverse_every_steps,
+            "must be at least 1");
+    for (int k = 0; k < f.count; ++k) {
+      c.Check(landmark_ids.count(f.first_id + k) == 0, "landmark_field.first_id", f.first_id,
+              "generated ids collide with the ids of 'landmarks'");
+    }
+  }
+
+  const auto& l = sensors.lidar;
+  c.Check(l.max_range_m > 0.0, "sensors.lidar.max_range_m", l.max_range_m, "must be positive");
+  c.Check(l.min_range_m >= 0.0 && l.min_range_m < l.max_range_m, "sensors.lidar.min_range_m",
+          l.min_range_m, "must be in [0, max_range_m)");
+  c.Check(l.fov_rad > 0.0 && l.fov_rad <= 2.0 * kPi + 1e-9, "sensors.lidar.fov_rad", l.fov_rad,
+          "must be in (0, 2*pi]");
+  c.Check(l.range_noise_sd_m >= 0.0, "sensors.lidar.range_noise_sd_m", l.range_noise_sd_m, "must not be negative");
+  c.Check(l.bearing_noise_sd_rad >= 0.0, "sensors.lidar.bearing_noise_sd_rad", l.bearing_noise_sd_rad,
+          "must not be negative");
+  c.Check(l.robot_detection_range_m >= 0.0, "sensors.lidar.robot_detection_range_m",
+          l.robot_detection_range_m, "must not be negative");
+  c.Check(l.detection_probability > 0.0 && l.detection_probability <= 1.0,
+          "sensors.lidar.detection_probability", l.detection_probability, "must be in (0, 1]");
+  const auto& m = sensors.imu;
+  c.Check(m.readings_per_step >= 1, "sensors.imu.readings_per_step", m.readings_per_step, "must be at least 1");
+  c.Check(m.gyro_noise_sd_radps >= 0.0, "sensors.imu.gyro_noise_sd_radps", m.gyro_noise_sd_radps,
+          "must not be negative");
+  c.Check(m.accel_noise_sd_mps2 >= 0.0, "sensors.imu.accel_noise_sd_mps2", m.accel_noise_sd_mps2,
+          "must not be negative");
+  c.Check(sensors.odometry.v_noise_sd_mps >= 0.0, "sensors.odometry.v_noise_sd_mps",
+          sensors.odometry.v_noise_sd_mps, "must not be negative");
+  c.Check(sensors.odometry.w_noise_sd_radps >= 0.0, "sensors.odometry.w_noise_sd_radps",
+          sensors.odometry.w_noise_sd_radps, "must not be negative");
+  c.Check((noise.robot_process_var.array() >= 0.0).all(), "noise.robot_process_var",
+          noise.robot_process_var.transpose(), "variances must not be negative");
+  c.Check((noise.landmark_process_var.array() >= 0.0).all(), "noise.landmark_process_var",
+          noise.landmark_process_var.transpose(), "variances must not be negative");
+
+  const auto& f = filter;
+  c.Check(f.type == "fastslam" || f.type == "ekf" || f.type == "ekf_ela", "filter.type", f.type,
+          "must be one of fastslam, ekf, ekf_ela");
+  c.Check(f.particles >= 1 && f.particles <= 1000000, "filter.particles", f.particles, "must be in 1..1000000");
+  c.Check(f.gate_probability > 0.0 && f.gate_probability < 1.0, "filter.gate_probability",
+          f.gate_probability, "must be in (0, 1)");
+  c.Check(f.new_landmark_probability >= f.gate_probability && f.new_landmark_probability < 1.0,
+          "filter.new_landmark_probability", f.new_landmark_probability, "must be in [gate_probability, 1)");
+  c.Check(f.euclidean_gate > 0.0, "filter.euclidean_gate", f.euclidean_gate, "must be positive");
+  c.Check(f.landmark_kinematics != LandmarkKinematics::kKnownCandidates || !f.known_kinematics.empty(),
+          "filter.known_kinematics", "[]", "needed when landmark_kinematics is known_candidates");
+  c.Check(f.max_landmark_speed_mps >= 0.0, "filter.max_landmark_speed_mps", f.max_landmark_speed_mps,
+          "must not be negative");
+  c.Check(f.confirm_sightings >= 1, "filter.confirm_sightings", f.confirm_sightings, "must be at least 1");
+  c.Check(f.drop_after_misses >= 1, "filter.drop_after_misses", f.drop_after_misses, "must be at least 1");
+  c.Check(f.resample_ess_fraction >= 0.0 && f.resample_ess_fraction <= 1.0, "filter.resample_ess_fraction",
+          f.resample_ess_fraction, "must be in [0, 1]");
+  c.Check(rendezvous.enable_from_step >= 0, "rendezvous.enable_from_step", rendezvous.enable_from_step,
+          "must not be negative");
+  c.Check(rendezvous.window_steps >= 1, "rendezvous.window_steps", rendezvous.window_steps, "must be at least 1");
+  c.Check(rendezvous.min_interval_steps >= 0, "rendezvous.min_interval_steps", rendezvous.min_interval_steps,
+          "must not be negative");
+  return c.ok();
+}
+
+void ApplyOverride(YAML::Node& root, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw ScenarioError("override '" + assignment + "' must have the form key.path=value");
+  }
+  const std::string path = assignment.substr(0, eq);
+  YAML::Node value;
+  try {
+    value = YAML::Load(assignment.substr(eq + 1));
+  } catch (const YAML::Exception& e) {
+    throw ScenarioError("override '" + assignment + "': value is not valid YAML (" + e.msg + ")");
+  }
+  std::vector<std::string> keys;
+  std::stringstream ss(path);
+  for (std::string k; std::getline(ss, k, '.');) keys.push_back(k);
+  // Walk with fresh handles (yaml-cpp node assignment rebinds, so never reassign a handle).
+  std::vector<YAML::Node> chain{root};
+  for (std::size_t i = 0; i + 1 < keys.size(); ++i) {
+    YAML::Node cur = chain.back();
+    const std::string& k = keys[i];
+    if (cur.IsSequence()) {
+      std::size_t idx = 0;
+      try {
+        idx = std::stoul(k);
+      } catch (const std::exception&) {
+        throw ScenarioError("override '" + path + "': '" + k + "' must be an index into a list");
+      }
+      if (idx >= cur.size()) throw ScenarioError("override '" + path + "': index " + k + " is out of range");
+      chain.push_back(cur[idx]);
+    } else {
+      if (!cur[k]) cur[k] = YAML::Node(YAML::NodeType::Map);
+      chain.push_back(cur[k]);
+    }
+  }
+  YAML::Node parent = chain.back();
+  const std::string& last = keys.back();
+  if (parent.IsSequence()) {
+    std::size_t idx = 0;
+    try {
+      idx = std::stoul(last);
+    } catch (const std::exception&) {
+      throw ScenarioError("override '" + path + "': '" + last + "' must be an index into a list");
+    }
+    if (idx >= parent.size()) throw ScenarioError("override '" + path + "': index " + last + " is out of range");
+    parent[idx] = value;
+  } else {
+    parent[last] = value;
+  }
+}
+
+ScenarioOptions LoadScenario(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw ScenarioError("cannot open scenario file '" + path + "'");
+  YAML::Node root;
+  try {
+    root = YAML::Load(in);
+  } catch (const YAML::Exception& e) {
+    throw ScenarioError("scenario file '" + path + "' is not valid YAML: " + e.what());
+  }
+  for (const auto& o : overrides) ApplyOverride(root, o);
+  ScenarioOptions options = CreateScenarioOptions(root);
+  std::string error;
+  if (!options.IsValid(&error)) throw ScenarioError(error);
+  return options;
+}
+
+}  // namespace mrslam::common

@@ -1,0 +1,194 @@
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <yaml-cpp/yaml.h>
+
+#include "common/se2.h"
+
+// The scenario file: one YAML document that describes the world, the robots, their sensors,
+// the agents' filter options and the run mode. Parsed into plain structs by
+// CreateScenarioOptions (unknown keys and wrong types throw ScenarioError naming the key) and
+// checked by IsValid (ranges and cross-field rules, naming the key, the value and the rule).
+namespace mrslam::common {
+
+// Thrown for unreadable files, bad YAML, unknown keys, wrong types and invalid values.
+class ScenarioError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class RunMode { kLockstep, kRealtime };
+
+struct RunOptions {
+  RunMode mode = RunMode::kLockstep;
+  double realtime_factor = 1.0;  // simulated seconds per wall second
+  int steps = 100;
+  double dt_s = 0.1;
+  double ack_timeout_s = 30.0;  // lockstep: an agent silent this long aborts the run
+  int domain = 0;               // DDS domain id
+};
+
+enum class LandmarkMotionModel { kStatic, kUnicycle, kCardinal, kConstantVelocity };
+
+struct LandmarkMotionOptions {
+  LandmarkMotionModel model = LandmarkMotionModel::kStatic;
+  double v_mps = 0.0;             // unicycle
+  double w_radps = 0.0;           // unicycle
+  double speed_mps = 0.0;         // cardinal
+  int reverse_every_steps = 20;   // cardinal
+  Eigen::Vector2d velocity_mps = Eigen::Vector2d::Zero();  // constant_velocity
+};
+
+struct LandmarkOptions {
+  int id = 0;
+  Pose2 pose;  // initial pose in the world frame
+  LandmarkMotionOptions motion;
+};
+
+// A generated field of landmarks (paper B's world): a jittered grid over a rectangle, a share
+// of which move in a random cardinal direction, reversing every N steps.
+struct LandmarkFieldOptions {
+  bool enabled = false;
+  int count = 0;
+  Eigen::Vector4d area_m = Eigen::Vector4d(-10, -10, 10, 10);  // x_min, y_min, x_max, y_max
+  double jitter_m = 0.5;
+  double moving_fraction = 0.0;
+  double speed_mps = 0.0;
+  int reverse_every_steps = 20;
+  int first_id = 1;
+};
+
+enum class ControlType { kConstant, kSchedule, kArc };
+
+struct ControlSegment {
+  double v_mps = 0.0;
+  double w_radps = 0.0;
+  double duration_s = 0.0;
+};
+
+struct ControlOptions {
+  ControlType type = ControlType::kConstant;
+  double v_mps = 0.0;    // constant
+  double w_radps = 0.0;  // constant
+  std::vector<ControlSegment> segments;  // schedule (then stands still)
+  double radius_m = 1.0;     // arc
+  double speed_mps = 0.0;    // arc
+  double sweep_rad = 0.0;    // arc (then stands still); 0 = forever
+  bool turn_left = true;     // arc
+};
+
+struct RobotOptions {
+  std::string id;
+  Pose2 initial_pose;     // in the world frame
+  Pose2 frame_in_world;   // pose of the robot's own frame G_i in W
+  ControlOptions control;
+};
+
+struct LidarOptions {
+  double max_range_m = 6.0;
+  double min_range_m = 0.0;
+  double fov_rad = 2.0 * kPi;
+  double range_noise_sd_m = 0.03;
+  double bearing_noise_sd_rad = 0.03;
+  bool report_identity = false;
+  double robot_detection_range_m = 6.0;
+  double detection_probability = 1.0;
+};
+
+struct ImuOptions {
+  bool enabled = true;
+  int readings_per_step = 1;
+  double gyro_noise_sd_radps = 0.01;
+  double accel_noise_sd_mps2 = 0.05;
+};
+
+struct OdometryOptions {
+  double v_noise_sd_mps = 0.0;
+  double w_noise_sd_radps = 0.0;
+};
+
+struct SensorOptions {
+  LidarOptions lidar;
+  ImuOptions imu;
+  OdometryOptions odometry;
+};
+
+// Per-step process noise variances over (x, y, heading), applied to the true motion by the
+// simulator and assumed by the filters.
+struct NoiseOptions {
+  Eigen::Vector3d robot_process_var = Eigen::Vector3d::Constant(0.001);
+  Eigen::Vector3d landmark_process_var = Eigen::Vector3d::Constant(0.001);
+};
+
+enum class MotionSource { kOdometry, kImu };
+enum class Association { kMahalanobis, kEuclidean };
+enum class Proposal { kMotion, kMeasurement };  // FastSLAM 1.0 / 2.0
+// What the agent knows of landmark kinematics: all static; a set of candidate (v, w) pairs
+// (paper A); or unknown, estimated online with a constant-turn-rate state.
+enum class LandmarkKinematics { kStatic, kKnownCandidates, kConstantTurnRate };
+
+struct KnownKinematics {
+  double v_mps = 0.0;
+  double w_radps = 0.0;
+};
+
+struct FilterOptions {
+  std::string type = "fastslam";  // fastslam | ekf | ekf_ela
+  int particles = 1000;
+  MotionSource motion_source = MotionSource::kOdometry;
+  Proposal proposal = Proposal::kMeasurement;
+  Association association = Association::kMahalanobis;
+  double gate_probability = 0.999;   // chi-square 2 dof gate
+  double new_landmark_probability = 0.9999;  // beyond this gate a detection starts a landmark
+  double euclidean_gate = 0.5;       // paper A's threshold on |[dr, db]|
+  LandmarkKinematics landmark_kinematics = LandmarkKinematics::kConstantTurnRate;
+  std::vector<KnownKinematics> known_kinematics;
+  double max_landmark_speed_mps = 1.0;  // bounds the association of a second sighting
+  int confirm_sightings = 2;   // tentative until seen this many times
+  int drop_after_misses = 5;   // dropped when expected in view but missed this many times
+  double resample_ess_fraction = 0.5;
+  bool resample_every_step = false;
+};
+
+struct RendezvousOptions {
+  int enable_from_step = 0;     // the detector may fire only from this step
+  int window_steps = 1;         // both detections must fall within this many steps
+  int min_interval_steps = 20;  // between repeated rendezvous of one pair
+};
+
+struct ScenarioOptions {
+  std::string name;
+  std::uint64_t seed = 1;
+  RunOptions run;
+  std::vector<LandmarkOptions> landmarks;
+  LandmarkFieldOptions landmark_field;
+  std::vector<RobotOptions> robots;
+  SensorOptions sensors;
+  NoiseOptions noise;
+  FilterOptions filter;
+  RendezvousOptions rendezvous;
+
+  // Range and cross-field checks; on failure *error names the key, the value and the rule.
+  bool IsValid(std::string* error) const;
+  // Index of a robot by id, or -1.
+  int RobotIndex(const std::string& id) const;
+};
+
+// Parses a scenario document. Throws ScenarioError on unknown keys, missing required keys and
+// values of the wrong type.
+ScenarioOptions CreateScenarioOptions(const YAML::Node& root);
+
+// Applies one "key.path=value" override (sequence elements by index: robots.1.id=r7) to a
+// document. Throws ScenarioError when the path does not lead anywhere.
+void ApplyOverride(YAML::Node& root, const std::string& assignment);
+
+// Loads a file, applies overrides in order, parses and validates. Throws ScenarioError with a
+// one-line reason.
+ScenarioOptions LoadScenario(const std::string& path, const std::vector<std::string>& overrides);
+
+}  // namespace mrslam::common

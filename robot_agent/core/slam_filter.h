@@ -1,0 +1,60 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/config/scenario_options.h"
+#include "common/se2.h"
+#include "common/sensor_types.h"
+
+namespace mrslam::robot_agent {
+
+enum class LandmarkMotionKind : std::uint8_t { kStatic = 0, kUnicycle = 1, kConstantTurnRate = 2 };
+
+// One landmark of an agent's map, in the agent's frame.
+struct MapLandmark {
+  std::uint32_t track_id = 0;   // the filter's own identifier
+  int landmark_id = -1;         // reported identity, -1 if unknown
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();  // x_m, y_m, heading_rad
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  double v_mps = 0.0;
+  double w_radps = 0.0;
+  LandmarkMotionKind motion = LandmarkMotionKind::kStatic;
+  bool moving = false;
+  bool tentative = false;
+  std::uint32_t last_seen_step = 0;
+};
+
+// What a filter reports after each step.
+struct FilterEstimate {
+  std::uint32_t step = 0;
+  double time_s = 0.0;
+  common::Pose2 pose;  // in the agent's own frame
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  double effective_sample_size = 1.0;
+  int particles = 1;
+  std::vector<MapLandmark> landmarks;
+};
+
+// A SLAM filter for one robot in its own frame: fastslam, ekf or ekf_ela. Pure: no DDS.
+class SlamFilter {
+ public:
+  virtual ~SlamFilter() = default;
+  // Predicts with the step's odometry or IMU and corrects with its lidar scan.
+  virtual void Process(const common::SensorStep& step) = 0;
+  virtual FilterEstimate Estimate() const = 0;
+};
+
+// The robot's initial pose in its own frame G_i: inverse(frame_in_world) * initial_pose.
+common::Pose2 InitialPoseInOwnFrame(const common::RobotOptions& robot);
+
+// Creates the filter the scenario asks for (options.filter.type), for robot robot_id, with a
+// random stream derived from (seed, robot_id). Returns nullptr for an unknown type.
+std::unique_ptr<SlamFilter> CreateFilter(const common::ScenarioOptions& options,
+                                         const std::string& robot_id, std::uint64_t seed);
+
+}  // namespace mrslam::robot_agent

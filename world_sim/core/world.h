@@ -1,0 +1,41 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/config/scenario_options.h"
+#include "common/rng.h"
+#include "common/sensor_types.h"
+
+namespace mrslam::world_sim {
+
+// The landmark list a scenario describes: its explicit landmarks followed by the generated
+// field (jittered grid; a seeded share of them move in a random cardinal direction).
+std::vector<common::LandmarkOptions> ExpandLandmarks(const common::ScenarioOptions& options);
+
+// The simulated 2-D world: differential-drive robots, landmarks with their motion models, and
+// each robot's sensors. Owns the true state and one seeded random stream per entity, so that a
+// scenario and a seed fix every sample. Pure: no DDS, no wall clock.
+//
+// Step k (k = 1..steps) moves every robot and landmark from time (k-1)*dt to k*dt with the
+// unicycle model of DESIGN.md plus process noise, then senses: odometry carries the command
+// applied during the step (plus odometry noise); the IMU the true rotation rate and body-frame
+// acceleration over the step (plus noise); the lidar every landmark and robot in range and
+// field of view at the new pose, in random order.
+class World {
+ public:
+  explicit World(const common::ScenarioOptions& options);
+
+  // Advances one step and returns each robot's samples, in scenario order.
+  std::vector<common::SensorStep> Step();
+
+  std::uint32_t step() const { return step_; }
+  double time_s() const;
+  // The truth now (world frame), with every robot's frame.
+  common::GroundTruth Truth() const;
+
+ private:
+  // (members: options, step counter, robot and landmark states, random streams)
+};
+
+}  // namespace mrslam::world_sim
