@@ -1,1 +1,104 @@
-// placeholder
+#include "common/dds/participant.h"
+
+#include <cstdlib>
+#include <fstream>
+#include <mutex>
+
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+
+namespace mrslam::dds {
+
+namespace fdds = eprosima::fastdds::dds;
+using eprosima::fastrtps::types::ReturnCode_t;
+
+int ResolveDomain(int scenario_domain, int flag_domain) {
+  int domain = flag_domain >= 0 ? flag_domain : scenario_domain;
+  if (const char* env = std::getenv("MRSLAM_DOMAIN"); env != nullptr && *env != '\0') {
+    char* end = nullptr;
+    const long v = std::strtol(env, &end, 10);
+    if (end == nullptr || *end != '\0') {
+      throw DdsError(std::string("MRSLAM_DOMAIN='") + env + "' is not an integer");
+    }
+    domain = static_cast<int>(v);
+  }
+  if (domain < 0 || domain > 232) {
+    throw DdsError("DDS domain " + std::to_string(domain) + " is outside 0..232");
+  }
+  return domain;
+}
+
+std::string ProfilesPath() {
+  if (const char* env = std::getenv("MRSLAM_DDS_PROFILES"); env != nullptr && *env != '\0') return env;
+  return MRSLAM_SOURCE_QOS_PROFILE;
+}
+
+namespace {
+
+// Loads the XML profiles once per process (before any participant QoS is read, or the
+// profiles are silently ignored).
+void LoadProfilesOnce() {
+  static std::once_flag once;
+  static std::string error;
+  std::call_once(once, [] {
+    const std::string path = ProfilesPath();
+    if (!std::ifstream(path)) {
+      error = "DDS profiles file '" + path + "' not found (set MRSLAM_DDS_PROFILES)";
+      return;
+    }
+    if (fdds::DomainParticipantFactory::get_instance()->load_XML_profiles_file(path) != ReturnCode_t::RETCODE_OK) {
+      error = "DDS profiles file '" + path + "' could not be loaded";
+    }
+  });
+  if (!error.empty()) throw DdsError(error);
+}
+
+}  // namespace
+
+Participant::Participant(const ParticipantOptions& options) {
+  LoadProfilesOnce();
+  auto* factory = fdds::DomainParticipantFactory::get_instance();
+  fdds::DomainParticipantQos qos;
+  const std::string profile = options.shared_memory ? "mrslam_shm" : "mrslam_udp";
+  if (factory->get_participant_qos_from_profile(profile, qos) != ReturnCode_t::RETCODE_OK) {
+    throw DdsError("DDS participant profile '" + profile + "' missing from " + ProfilesPath());
+  }
+  qos.name(options.name);
+  participant_ = factory->create_participant(options.domain, qos, nullptr, fdds::StatusMask::none());
+  if (participant_ == nullptr) {
+    throw DdsError("cannot create a DDS participant on domain " + std::to_string(options.domain));
+  }
+  publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  if (publisher_ == nullptr || subscriber_ == nullptr) {
+    throw DdsError("cannot create a DDS publisher/subscriber");
+  }
+}
+
+Participant::~Participant() {
+  if (participant_ == nullptr) return;
+  participant_->delete_contained_entities();
+  fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+fdds::Topic* Participant::GetTopic(const std::string& name, fdds::TypeSupport type) {
+  if (auto it = topics_.find(name); it != topics_.end()) return it->second;
+  const std::string type_name = type.get_type_name();
+  if (participant_->find_type(type_name).empty()) {
+    if (type.register_type(participant_) != ReturnCode_t::RETCODE_OK) {
+      throw DdsError("cannot register DDS type '" + type_name + "'");
+    }
+  }
+  auto* topic = participant_->create_topic(name, type_name, fdds::TOPIC_QOS_DEFAULT);
+  if (topic == nullptr) throw DdsError("cannot create DDS topic '" + name + "'");
+  topics_[name] = topic;
+  return topic;
+}
+
+std::string LidarTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/lidar"; }
+std::string ImuTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/imu"; }
+std::string OdometryTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/odom"; }
+std::string EstimateTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/estimate"; }
+std::string AckTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/ack"; }
+
+}  // namespace mrslam::dds

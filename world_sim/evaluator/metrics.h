@@ -1,9 +1,8 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/se2.h"
 
@@ -24,37 +23,50 @@ struct TruePoint {
   int landmark_id = 0;
 };
 
-// The truth expressed in a robot's own frame.
-common::Pose2 TruthInOwnFrame(const common::Pose2& truth_in_world, const common::Pose2& frame_in_world);
+// The truth expressed in a robot's own frame G_i:
+//   T(G_i <- body) = T(W <- G_i)^-1 * T(W <- body).
+common::Pose2 TruthInOwnFrame(const common::Pose2& truth_in_world,
+                              const common::Pose2& frame_in_world);
 
-// Position error (m) and wrapped heading error (rad) of an estimate in G_i.
+// Position error (m), ||t_est - t_true||, and absolute wrapped heading error (rad),
+// |wrap(phi_est - phi_true)| in [0, pi], of an estimate in G_i.
 double PositionError(const common::Pose2& estimate, const common::Pose2& truth_in_own_frame);
 double HeadingError(const common::Pose2& estimate, const common::Pose2& truth_in_own_frame);
 
-// Normalized estimation error squared of a pose estimate (3 dof).
+// Normalized estimation error squared of a pose estimate (3 dof):
+//   e = (x_est - x, y_est - y, wrap(phi_est - phi)),  NEES = e^T P^-1 e.
+// Its expectation is 3 for a consistent filter. NaN if P is not positive definite.
 double PoseNees(const common::Pose2& estimate, const Eigen::Matrix3d& covariance,
                 const common::Pose2& truth_in_own_frame);
 
 // Per map landmark, its error (m) against the true current position of the landmark it stands
-// for: by reported identity when it has one, else by an optimal assignment (minimum total
-// squared distance) among the true landmarks not claimed by identity, with a cut-off: a map
+// for: by reported identity when it has one (and a true landmark with that id exists), else by
+// an optimal assignment among the true landmarks not claimed by identity, with a cut-off: a map
 // landmark with no true partner within cutoff_m counts as cutoff_m. Returns one error per map
-// landmark, in map order.
-std::vector<double> LandmarkErrors(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
+// landmark, in map order; every error is in [0, cutoff_m].
+//
+// The assignment minimizes sum_k min(d_k^2, cutoff_m^2), the total squared distance with pairs
+// beyond the cut-off costing the same as no partner (as in OSPA), so a far ghost cannot pull a
+// true landmark away from a map landmark that is near it.
+std::vector<double> LandmarkErrors(const std::vector<MapPoint>& map,
+                                   const std::vector<TruePoint>& truth,
                                    const common::Pose2& frame_in_world, double cutoff_m = 3.0);
 
 // Indices of the true landmarks (into truth) that some map landmark stands for (as matched by
-// LandmarkErrors within the cut-off).
+// LandmarkErrors within the cut-off), ascending, each once.
 std::vector<int> MatchedTruth(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
                               const common::Pose2& frame_in_world, double cutoff_m = 3.0);
 
-// Minimum-cost assignment (Hungarian algorithm) of rows to columns of a cost matrix (rows <=
-// columns or not): returns for each row the assigned column or -1.
+// Minimum-cost assignment (Hungarian algorithm, O(n^2 m) with potentials) of rows to columns of
+// a cost matrix (rows <= columns or not): returns for each row the assigned column or -1. Every
+// row gets a column when rows <= columns, else every column gets a row; the total cost of the
+// assigned pairs is the minimum over all such assignments. Costs must be finite.
 std::vector<int> OptimalAssignment(const Eigen::MatrixXd& cost);
 
 // Root mean square of a set of values (0 for none).
 double Rmse(const std::vector<double>& errors);
-// Median and p-th percentile (p in [0, 100], linear interpolation); NaN for no values.
+// Median and p-th percentile (p in [0, 100], linear interpolation between the closest ranks as
+// numpy's default: rank r = p / 100 * (n - 1)); NaN for no values.
 double Median(std::vector<double> values);
 double Percentile(std::vector<double> values, double p);
 
@@ -63,7 +75,10 @@ struct TransformError {
   double translation_m = 0.0;
   double rotation_rad = 0.0;
 };
-TransformError FrameTransformError(const common::Pose2& t_i_j_estimate, const common::Pose2& frame_i_in_world,
+// True T(G_i <- G_j) = T(W <- G_i)^-1 * T(W <- G_j); translation_m = ||t_est - t_true|| (in G_i),
+// rotation_rad = |wrap(phi_est - phi_true)|.
+TransformError FrameTransformError(const common::Pose2& t_i_j_estimate,
+                                   const common::Pose2& frame_i_in_world,
                                    const common::Pose2& frame_j_in_world);
 
 }  // namespace mrslam::evaluator

@@ -1,1 +1,181 @@
-// placeholder
+#include "world_sim/node/sim_node.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <memory>
+#include <set>
+#include <thread>
+
+#include <spdlog/spdlog.h>
+
+#include "common/dds/msg_conversion.h"
+#include "common/dds/participant.h"
+#include "mrslamPubSubTypes.h"
+#include "world_sim/core/world.h"
+
+namespace mrslam::world_sim {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+struct RobotWriters {
+  std::unique_ptr<dds::Writer<msg::LidarScanPubSubType>> lidar;
+  std::unique_ptr<dds::Writer<msg::ImuPubSubType>> imu;
+  std::unique_ptr<dds::Writer<msg::OdometryPubSubType>> odometry;
+};
+}  // namespace
+
+struct SimNode::Impl {
+  common::ScenarioOptions scenario;
+  SimNodeOptions options;
+  World world;
+  dds::Participant participant;
+  std::map<std::string, RobotWriters> writers;
+  std::unique_ptr<dds::Writer<msg::GroundTruthPubSubType>> truth;
+  std::unique_ptr<dds::Writer<msg::StepClockPubSubType>> clock;
+  std::map<std::string, std::unique_ptr<dds::Reader<msg::StepAckPubSubType>>> acks;
+
+  Impl(const common::ScenarioOptions& s, const SimNodeOptions& o)
+      : scenario(s), options(o), world(s), participant({o.domain, "world_sim", o.shared_memory}) {
+    for (const auto& r : s.robots) {
+      auto& w = writers[r.id];
+      w.lidar = std::make_unique<dds::Writer<msg::LidarScanPubSubType>>(participant, dds::LidarTopic(r.id));
+      w.imu = std::make_unique<dds::Writer<msg::ImuPubSubType>>(participant, dds::ImuTopic(r.id));
+      w.odometry = std::make_unique<dds::Writer<msg::OdometryPubSubType>>(participant, dds::OdometryTopic(r.id));
+    }
+    truth = std::make_unique<dds::Writer<msg::GroundTruthPubSubType>>(participant, dds::kTruthTopic);
+    clock = std::make_unique<dds::Writer<msg::StepClockPubSubType>>(participant, dds::kClockTopic);
+    for (const auto& id : o.agents) {
+      acks[id] = std::make_unique<dds::Reader<msg::StepAckPubSubType>>(participant, dds::AckTopic(id));
+    }
+  }
+
+  template <typename W, typename M>
+  static void WriteOrThrow(W& writer, const M& message, const std::string& what) {
+    if (!writer.Write(message)) throw SimError("DDS refused to publish " + what);
+  }
+
+  // Waits until every agent has acknowledged `step`; collects their peer-message counts.
+  // Returns false when stopped; throws SimError naming a silent agent.
+  bool WaitForAcks(std::uint32_t step, const std::atomic<bool>& stop,
+                   std::vector<msg::PeerDelivery>* deliveries) {
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(scenario.run.ack_timeout_s));
+    for (const auto& [id, reader] : acks) {
+      while (true) {
+        if (stop) return false;
+        msg::StepAck ack;
+        if (reader->Take(&ack, milliseconds(50))) {
+          if (ack.stamp().robot_id() != id) {
+            spdlog::warn("ack on {}'s topic claims robot '{}': ignored", id, ack.stamp().robot_id());
+            continue;
+          }
+          if (ack.stamp().step() < step) continue;  // an old acknowledgement (replayed history)
+          if (ack.stamp().step() > step) {
+            throw SimError("agent '" + id + "' acknowledged step " + std::to_string(ack.stamp().step()) +
+                           " before step " + std::to_string(step) + " was published");
+          }
+          if (deliveries != nullptr) {
+            for (const auto& pc : ack.peer_messages_sent()) {
+              msg::PeerDelivery d;
+              d.sender_id(id);
+              d.recipient_id(pc.peer_id());
+              d.count(pc.count());
+              deliveries->push_back(d);
+            }
+          }
+          break;
+        }
+        if (Clock::now() > deadline) {
+          throw SimError("agent '" + id + "' did not acknowledge step " + std::to_string(step) + " within " +
+                         std::to_string(scenario.run.ack_timeout_s) + " s");
+        }
+      }
+    }
+    return true;
+  }
+
+  void Publish(const std::vector<common::SensorStep>& samples, const std::vector<msg::PeerDelivery>& deliveries) {
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const auto& id = scenario.robots[i].id;
+      auto& w = writers.at(id);
+      WriteOrThrow(*w.odometry, dds::ToMsg(samples[i].odometry), id + " odometry");
+      WriteOrThrow(*w.imu, dds::ToMsg(samples[i].imu), id + " imu");
+      WriteOrThrow(*w.lidar, dds::ToMsg(samples[i].lidar), id + " lidar");
+    }
+    WriteOrThrow(*truth, dds::ToMsg(world.Truth()), "ground truth");
+    msg::StepClock c;
+    c.stamp().robot_id("world");
+    c.stamp().step(world.step());
+    c.stamp().time_s(world.time_s());
+    c.total_steps(static_cast<std::uint32_t>(scenario.run.steps));
+    c.last_step(static_cast<int>(world.step()) == scenario.run.steps);
+    c.peer_deliveries(deliveries);
+    WriteOrThrow(*clock, c, "step clock");
+  }
+};
+
+SimNode::SimNode(const common::ScenarioOptions& scenario, const SimNodeOptions& options)
+    : impl_(new Impl(scenario, options)) {}
+
+SimNode::~SimNode() { delete impl_; }
+
+bool SimNode::Run(const std::atomic<bool>& stop) {
+  Impl& s = *impl_;
+  const bool lockstep = s.scenario.run.mode == common::RunMode::kLockstep;
+  const int steps = s.scenario.run.steps;
+  spdlog::info("scenario '{}', seed {}, {} steps of {} s, {} mode, agents: {}", s.scenario.name, s.scenario.seed,
+               steps, s.scenario.run.dt_s, lockstep ? "lockstep" : "realtime",
+               s.options.agents.empty() ? std::string("none") : fmt::format("{}", fmt::join(s.options.agents, ", ")));
+  // Step 0: every agent says it is ready (its readers exist).
+  if (!s.WaitForAcks(0, stop, nullptr)) return false;
+  spdlog::info("all agents ready");
+
+  // The initial truth (step 0), so that the evaluator knows where everything started.
+  if (!s.truth->Write(dds::ToMsg(s.world.Truth()))) throw SimError("DDS refused to publish ground truth");
+
+  const auto start = Clock::now();
+  std::vector<msg::PeerDelivery> deliveries;
+  std::vector<double> ack_latency_ms;
+  int last_percent = -1;
+  for (int k = 1; k <= steps; ++k) {
+    if (stop) return false;
+    const auto samples = s.world.Step();
+    const auto published = Clock::now();
+    s.Publish(samples, deliveries);
+    deliveries.clear();
+    if (lockstep) {
+      if (!s.WaitForAcks(static_cast<std::uint32_t>(k), stop, &deliveries)) return false;
+      ack_latency_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - published).count());
+    } else {
+      const auto due = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                                   k * s.scenario.run.dt_s / s.scenario.run.realtime_factor));
+      while (Clock::now() < due) {
+        if (stop) return false;
+        std::this_thread::sleep_until(std::min(due, Clock::now() + milliseconds(50)));
+      }
+    }
+    const int percent = 100 * k / steps;
+    if (percent / 10 != last_percent / 10) {
+      spdlog::info("step {}/{} ({}%)", k, steps, percent);
+      last_percent = percent;
+    }
+  }
+  if (!ack_latency_ms.empty()) {
+    std::sort(ack_latency_ms.begin(), ack_latency_ms.end());
+    spdlog::info("step round trip (publish to last ack): median {:.2f} ms, max {:.2f} ms",
+                 ack_latency_ms[ack_latency_ms.size() / 2], ack_latency_ms.back());
+  }
+  // Let every matched reader (the evaluator) receive everything before the writers go away.
+  const auto drain = std::chrono::duration_cast<milliseconds>(std::chrono::duration<double>(s.options.drain_timeout_s));
+  if (!s.truth->WaitForAcknowledgments(drain) || !s.clock->WaitForAcknowledgments(drain)) {
+    spdlog::warn("some readers did not acknowledge every sample within {} s", s.options.drain_timeout_s);
+  }
+  spdlog::info("run complete: {} steps in {:.2f} s", steps,
+               std::chrono::duration<double>(Clock::now() - start).count());
+  return true;
+}
+
+}  // namespace mrslam::world_sim

@@ -1,0 +1,54 @@
+#include "common/app.h"
+
+#include <csignal>
+#include <iostream>
+
+#include <spdlog/spdlog.h>
+
+namespace mrslam::common {
+
+namespace {
+std::atomic<bool> g_stop{false};
+extern "C" void OnStopSignal(int /*signal*/) { g_stop = true; }
+}  // namespace
+
+void AddCommonFlags(CLI::App& app, CommonFlags* flags) {
+  app.add_option("--scenario", flags->scenario, "Scenario YAML file")->required()->check(CLI::ExistingFile);
+  app.add_option("--domain", flags->domain, "DDS domain id (0..232); MRSLAM_DOMAIN overrides it");
+  app.add_option("--seed", flags->seed, "Run seed (overrides the scenario's 'seed')");
+  app.add_option("--set", flags->overrides, "Override a scenario key: key.path=value (repeatable)");
+  app.add_flag("--shm", flags->shared_memory, "Use the shared-memory transport besides UDPv4");
+  app.add_option("--log-level", flags->log_level, "trace, debug, info, warn or error");
+}
+
+ScenarioOptions LoadScenarioFromFlags(const CommonFlags& flags) {
+  ScenarioOptions options = LoadScenario(flags.scenario, flags.overrides);
+  if (flags.seed >= 0) options.seed = static_cast<std::uint64_t>(flags.seed);
+  return options;
+}
+
+const std::atomic<bool>& InstallStopHandler() {
+  std::signal(SIGINT, OnStopSignal);
+  std::signal(SIGTERM, OnStopSignal);
+  return g_stop;
+}
+
+int RunMain(const std::string& name, CLI::App& app, int argc, char** argv, const std::function<int()>& body) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << name << ": error: " << e.what() << " (see --help)\n";
+    return 2;
+  }
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    spdlog::shutdown();
+    std::cerr << name << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace mrslam::common

@@ -1,0 +1,39 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "common/config/scenario_options.h"
+
+// What every mrslam executable shares on its command line (--scenario, --domain, --seed,
+// --set, --shm, --log-level), the stop flag that SIGINT/SIGTERM raise, and the top-level
+// error handling: one line on stderr and a non-zero exit code.
+namespace mrslam::common {
+
+struct CommonFlags {
+  std::string scenario;
+  int domain = -1;  // -1: the scenario's run.domain (MRSLAM_DOMAIN overrides both)
+  long long seed = -1;  // -1: the scenario's seed
+  std::vector<std::string> overrides;
+  bool shared_memory = false;
+  std::string log_level = "info";
+};
+
+void AddCommonFlags(CLI::App& app, CommonFlags* flags);
+
+// Loads the scenario with the --set overrides, then applies --seed.
+ScenarioOptions LoadScenarioFromFlags(const CommonFlags& flags);
+
+// The flag SIGINT and SIGTERM set (installed once).
+const std::atomic<bool>& InstallStopHandler();
+
+// Parses the command line and runs body: exceptions become "<name>: error: <what>" on stderr and
+// exit code 1; --help prints usage and exits 0; bad flags exit 2.
+int RunMain(const std::string& name, CLI::App& app, int argc, char** argv, const std::function<int()>& body);
+
+}  // namespace mrslam::common

@@ -1,0 +1,24 @@
+#pragma once
+
+#include "common/sensor_types.h"
+#include "mrslam.h"
+
+// Conversions between the DDS messages and the plain structs of the pure cores (free
+// functions at the edge, with round-trip tests).
+namespace mrslam::dds {
+
+msg::Stamp ToMsg(const common::Stamp& s);
+common::Stamp FromMsg(const msg::Stamp& s);
+msg::Pose2D ToMsg(const common::Pose2& p);
+common::Pose2 FromMsg(const msg::Pose2D& p);
+
+msg::LidarScan ToMsg(const common::LidarScan& scan);
+common::LidarScan FromMsg(const msg::LidarScan& scan);
+msg::Imu ToMsg(const common::ImuSamples& imu);
+common::ImuSamples FromMsg(const msg::Imu& imu);
+msg::Odometry ToMsg(const common::Odometry& odom);
+common::Odometry FromMsg(const msg::Odometry& odom);
+msg::GroundTruth ToMsg(const common::GroundTruth& truth);
+common::GroundTruth FromMsg(const msg::GroundTruth& truth);
+
+}  // namespace mrslam::dds

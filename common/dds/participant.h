@@ -1,0 +1,199 @@
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+// The only DDS plumbing of the project: one participant per process built from the XML
+// profiles in config/dds_profiles.xml, and typed RAII writers and readers. Nodes use these;
+// the pure cores never see them.
+namespace mrslam::dds {
+
+// Thrown when a DDS entity cannot be created (start-up only).
+class DdsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The domain a process joins: the scenario's, overridden by --domain (flag >= 0), overridden
+// by the environment variable MRSLAM_DOMAIN. Throws DdsError outside 0..232.
+int ResolveDomain(int scenario_domain, int flag_domain);
+
+// Path of the XML profiles: MRSLAM_DDS_PROFILES if set, else config/dds_profiles.xml of the
+// source tree this binary was built from.
+std::string ProfilesPath();
+
+struct ParticipantOptions {
+  int domain = 0;
+  std::string name = "mrslam";
+  bool shared_memory = false;  // default transports are UDPv4 only
+};
+
+// Owns one DomainParticipant, its publisher, subscriber and topics; deletes everything it
+// created on destruction. Not copyable. Writers and readers it makes must not outlive it.
+class Participant {
+ public:
+  explicit Participant(const ParticipantOptions& options);
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  eprosima::fastdds::dds::DomainParticipant* get() { return participant_; }
+  eprosima::fastdds::dds::Publisher* publisher() { return publisher_; }
+  eprosima::fastdds::dds::Subscriber* subscriber() { return subscriber_; }
+
+  // Registers PubSubType once per type name and returns the topic (created once per name).
+  eprosima::fastdds::dds::Topic* GetTopic(const std::string& name, eprosima::fastdds::dds::TypeSupport type);
+
+ private:
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+  std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
+};
+
+constexpr char kWriterProfile[] = "mrslam_stream_writer";
+constexpr char kReaderProfile[] = "mrslam_stream_reader";
+
+// A typed writer on one topic. Write() returns false when DDS refuses the sample.
+template <typename PubSubType>
+class Writer {
+ public:
+  using Msg = typename PubSubType::type;
+  Writer(Participant& participant, const std::string& topic)
+      : participant_(participant) {
+    auto* t = participant.GetTopic(topic, eprosima::fastdds::dds::TypeSupport(new PubSubType()));
+    writer_ = participant.publisher()->create_datawriter_with_profile(t, kWriterProfile);
+    if (writer_ == nullptr) throw DdsError("cannot create a writer on topic '" + topic + "'");
+  }
+  ~Writer() { participant_.publisher()->delete_datawriter(writer_); }
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  bool Write(const Msg& msg) { return writer_->write(const_cast<Msg*>(&msg)); }
+  int MatchedReaders() const {
+    eprosima::fastdds::dds::PublicationMatchedStatus s;
+    writer_->get_publication_matched_status(s);
+    return s.current_count;
+  }
+  // Waits until every matched reader has acknowledged every sample, or the timeout.
+  bool WaitForAcknowledgments(std::chrono::milliseconds timeout) {
+    const auto secs = std::chrono::duration<double>(timeout).count();
+    return writer_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(secs)) ==
+           eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+  }
+
+ private:
+  Participant& participant_;
+  eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+};
+
+// Wakes one consumer thread when any of several readers receives data (a generation counter
+// under a mutex, so no wake-up is lost between a check and a wait).
+class Notifier {
+ public:
+  void Notify() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++generation_;
+    }
+    cv_.notify_all();
+  }
+  // Waits until the generation differs from *seen (then updates it) or the timeout.
+  bool Wait(std::uint64_t* seen, std::chrono::milliseconds timeout) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const bool changed = cv_.wait_for(lock, timeout, [&] { return generation_ != *seen; });
+    *seen = generation_;
+    return changed;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::uint64_t generation_ = 0;
+};
+
+// A typed reader that queues every valid sample as it arrives (listener thread) for the owner
+// to take (its own thread), with a timeout. Never throws out of the listener.
+template <typename PubSubType>
+class Reader : public eprosima::fastdds::dds::DataReaderListener {
+ public:
+  using Msg = typename PubSubType::type;
+  Reader(Participant& participant, const std::string& topic, Notifier* notifier = nullptr)
+      : participant_(participant), notifier_(notifier) {
+    auto* t = participant.GetTopic(topic, eprosima::fastdds::dds::TypeSupport(new PubSubType()));
+    reader_ = participant.subscriber()->create_datareader_with_profile(
+        t, kReaderProfile, this, eprosima::fastdds::dds::StatusMask::data_available());
+    if (reader_ == nullptr) throw DdsError("cannot create a reader on topic '" + topic + "'");
+  }
+  ~Reader() override {
+    reader_->set_listener(nullptr);
+    participant_.subscriber()->delete_datareader(reader_);
+  }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  // Takes the oldest queued sample; waits up to timeout. False on timeout.
+  bool Take(Msg* out, std::chrono::milliseconds timeout) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!cv_.wait_for(lock, timeout, [this] { return !queue_.empty(); })) return false;
+    *out = std::move(queue_.front());
+    queue_.pop_front();
+    return true;
+  }
+  bool TryTake(Msg* out) { return Take(out, std::chrono::milliseconds(0)); }
+  int MatchedWriters() const {
+    eprosima::fastdds::dds::SubscriptionMatchedStatus s;
+    reader_->get_subscription_matched_status(s);
+    return s.current_count;
+  }
+
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
+    Msg msg;
+    eprosima::fastdds::dds::SampleInfo info;
+    while (reader->take_next_sample(&msg, &info) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        queue_.push_back(msg);
+      }
+      cv_.notify_all();
+      if (notifier_ != nullptr) notifier_->Notify();
+    }
+  }
+
+ private:
+  Participant& participant_;
+  Notifier* notifier_;
+  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Msg> queue_;
+};
+
+// Topic names (DESIGN.md).
+std::string LidarTopic(const std::string& robot_id);
+std::string ImuTopic(const std::string& robot_id);
+std::string OdometryTopic(const std::string& robot_id);
+std::string EstimateTopic(const std::string& robot_id);
+std::string AckTopic(const std::string& robot_id);
+constexpr char kTruthTopic[] = "mrslam/world/truth";
+constexpr char kClockTopic[] = "mrslam/world/clock";
+
+}  // namespace mrslam::dds

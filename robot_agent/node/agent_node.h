@@ -1,0 +1,53 @@
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "common/config/scenario_options.h"
+#include "robot_agent/core/slam_filter.h"
+
+namespace mrslam::robot_agent {
+
+// Thrown when the agent cannot go on: the simulator silent past the timeout, DDS refusing.
+class AgentError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct AgentNodeOptions {
+  std::string robot_id;
+  int domain = 0;
+  bool shared_memory = false;
+  double timeout_s = 30.0;  // no new step for this long is an error
+};
+
+// Counters of what the agent rejected (each also logged as a warning).
+struct AgentCounters {
+  int steps_processed = 0;
+  int rejected_samples = 0;
+};
+
+// A robot agent's DDS node: reads only its own robot's lidar, IMU and odometry topics and the
+// step clock (never the truth), runs the filter on each complete step in order, publishes its
+// estimate on mrslam/<robot>/estimate and acknowledges the step on mrslam/<robot>/ack (step 0 =
+// ready). Malformed samples are rejected and counted. Owns the participant, endpoints, filter.
+class AgentNode {
+ public:
+  AgentNode(const common::ScenarioOptions& scenario, const AgentNodeOptions& options,
+            std::unique_ptr<SlamFilter> filter);
+  ~AgentNode();
+  AgentNode(const AgentNode&) = delete;
+  AgentNode& operator=(const AgentNode&) = delete;
+
+  // Processes steps until the clock's last step. False if stopped early; throws AgentError.
+  bool Run(const std::atomic<bool>& stop);
+  const AgentCounters& counters() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mrslam::robot_agent

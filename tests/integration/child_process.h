@@ -1,0 +1,89 @@
+#pragma once
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <fcntl.h>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace mrslam::testing {
+
+// A child process for multi-process tests: started with posix_spawn, its stdout and stderr in a
+// log file; waited for with a timeout; killed (SIGKILL) if still running when destroyed, so a
+// failing test leaves no process behind.
+class ChildProcess {
+ public:
+  ChildProcess(const std::vector<std::string>& argv, const std::string& log_path) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    if (posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+  }
+  ~ChildProcess() {
+    if (running()) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  bool started() const { return pid_ > 0; }
+  bool running() const { return pid_ > 0 && !exit_code_.has_value(); }
+  pid_t pid() const { return pid_; }
+  void Signal(int signal) const {
+    if (running()) kill(pid_, signal);
+  }
+
+  // The exit code (128 + signal if killed), or nullopt if still running after the timeout.
+  std::optional<int> WaitExit(std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (running()) {
+      int status = 0;
+      const pid_t r = waitpid(pid_, &status, WNOHANG);
+      if (r == pid_) {
+        exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+        break;
+      }
+      if (std::chrono::steady_clock::now() > deadline) return std::nullopt;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return exit_code_;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  std::optional<int> exit_code_;
+};
+
+// Path of a built executable (MRSLAM_BIN_DIR is set by the test registration).
+inline std::string BinPath(const std::string& name) {
+  const char* dir = std::getenv("MRSLAM_BIN_DIR");
+  return std::string(dir != nullptr ? dir : "build/bin") + "/" + name;
+}
+inline std::string SourcePath(const std::string& rel) {
+  const char* dir = std::getenv("MRSLAM_SOURCE_DIR");
+  return std::string(dir != nullptr ? dir : ".") + "/" + rel;
+}
+
+// Reads a whole text file (empty if missing).
+std::string ReadFile(const std::string& path);
+
+// A fresh temporary directory for a test's logs and outputs.
+std::string MakeTempDir(const std::string& prefix);
+
+}  // namespace mrslam::testing
