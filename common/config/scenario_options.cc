@@ -298,6 +298,12 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
       k.RejectUnknownKeys();
     }
     d.max_landmark_speed_mps = f.Get("max_landmark_speed_mps", d.max_landmark_speed_mps);
+    d.landmark_speed_process_var =
+        f.Get("landmark_speed_process_var", d.landmark_speed_process_var);
+    d.landmark_turn_rate_process_var =
+        f.Get("landmark_turn_rate_process_var", d.landmark_turn_rate_process_var);
+    d.landmark_turn_rate_prior_sd_radps =
+        f.Get("landmark_turn_rate_prior_sd_radps", d.landmark_turn_rate_prior_sd_radps);
     d.confirm_sightings = f.Get("confirm_sightings", d.confirm_sightings);
     d.drop_after_misses = f.Get("drop_after_misses", d.drop_after_misses);
     d.resample_ess_fraction = f.Get("resample_ess_fraction", d.resample_ess_fraction);
@@ -458,6 +464,12 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           "filter.known_kinematics", "[]", "needed when landmark_kinematics is known_candidates");
   c.Check(f.max_landmark_speed_mps >= 0.0, "filter.max_landmark_speed_mps", f.max_landmark_speed_mps,
           "must not be negative");
+  c.Check(f.landmark_speed_process_var >= 0.0, "filter.landmark_speed_process_var",
+          f.landmark_speed_process_var, "must not be negative");
+  c.Check(f.landmark_turn_rate_process_var >= 0.0, "filter.landmark_turn_rate_process_var",
+          f.landmark_turn_rate_process_var, "must not be negative");
+  c.Check(f.landmark_turn_rate_prior_sd_radps > 0.0, "filter.landmark_turn_rate_prior_sd_radps",
+          f.landmark_turn_rate_prior_sd_radps, "must be positive");
   c.Check(f.confirm_sightings >= 1, "filter.confirm_sightings", f.confirm_sightings, "must be at least 1");
   c.Check(f.drop_after_misses >= 1, "filter.drop_after_misses", f.drop_after_misses, "must be at least 1");
   c.Check(f.resample_ess_fraction >= 0.0 && f.resample_ess_fraction <= 1.0, "filter.resample_ess_fraction",
@@ -486,9 +498,18 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment) {
   std::stringstream ss(path);
   for (std::string k; std::getline(ss, k, '.');) keys.push_back(k);
   // Walk with fresh handles (yaml-cpp node assignment rebinds, so never reassign a handle).
+  // A scalar on the way has no children: name the prefix that holds it (yaml-cpp would throw
+  // its own BadSubscript, which is not a ScenarioError).
+  const auto reject_scalar = [&](const YAML::Node& node, std::size_t depth) {
+    if (!node.IsScalar()) return;
+    std::string prefix;
+    for (std::size_t j = 0; j < depth; ++j) prefix += (j == 0 ? "" : ".") + keys[j];
+    throw ScenarioError("override '" + path + "': '" + prefix + "' is a value, not a mapping or a list");
+  };
   std::vector<YAML::Node> chain{root};
   for (std::size_t i = 0; i + 1 < keys.size(); ++i) {
     YAML::Node cur = chain.back();
+    reject_scalar(cur, i);
     const std::string& k = keys[i];
     if (cur.IsSequence()) {
       std::size_t idx = 0;
@@ -505,6 +526,7 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment) {
     }
   }
   YAML::Node parent = chain.back();
+  reject_scalar(parent, keys.size() - 1);
   const std::string& last = keys.back();
   if (parent.IsSequence()) {
     std::size_t idx = 0;

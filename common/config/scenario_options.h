@@ -149,6 +149,11 @@ struct FilterOptions {
   LandmarkKinematics landmark_kinematics = LandmarkKinematics::kConstantTurnRate;
   std::vector<KnownKinematics> known_kinematics;
   double max_landmark_speed_mps = 1.0;  // bounds the association of a second sighting
+  // constant_turn_rate: per-step random-walk variances of a landmark's speed and turn rate, and
+  // the prior standard deviation of the turn rate when a landmark's full state starts.
+  double landmark_speed_process_var = 1e-4;      // (m/s)^2 per step
+  double landmark_turn_rate_process_var = 1e-4;  // (rad/s)^2 per step
+  double landmark_turn_rate_prior_sd_radps = 0.5;
   int confirm_sightings = 2;   // tentative until seen this many times
   int drop_after_misses = 5;   // dropped when expected in view but missed this many times
   double resample_ess_fraction = 0.5;

@@ -3,9 +3,14 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/se2.h"
+
 #include "common/config/scenario_options.h"
 #include "common/rng.h"
 #include "common/sensor_types.h"
+#include "world_sim/core/landmark_motion.h"
+#include "world_sim/core/robot_motion.h"
+#include "world_sim/core/sensors.h"
 
 namespace mrslam::world_sim {
 
@@ -35,7 +40,18 @@ class World {
   common::GroundTruth Truth() const;
 
  private:
-  // (members: options, step counter, robot and landmark states, random streams)
+  // One robot: its options, true pose, process-noise stream (seed, "world/<id>") and sensors.
+  struct SimRobot {
+    common::RobotOptions options;
+    common::Pose2 pose;
+    common::Rng process_rng;
+    RobotSensors sensors;
+  };
+
+  common::ScenarioOptions options_;
+  std::uint32_t step_ = 0;
+  std::vector<SimRobot> robots_;        // scenario order
+  std::vector<SimLandmark> landmarks_;  // ExpandLandmarks order
 };
 
 }  // namespace mrslam::world_sim
