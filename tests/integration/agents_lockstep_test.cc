@@ -1,0 +1,82 @@
+// Multi-process: world_sim and two robot_agent processes complete paper_two_robots.yaml in
+// lockstep; each agent publishes an estimate for every step, in order, from its own frame.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "common/config/scenario_options.h"
+#include "common/dds/participant.h"
+#include "mrslamPubSubTypes.h"
+#include "tests/integration/child_process.h"
+
+namespace mrslam {
+namespace {
+
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+using testing::BinPath;
+using testing::ChildProcess;
+using testing::SourcePath;
+
+constexpr int kDomain = 113;  // this test's own DDS domain
+
+TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string scenario_path = SourcePath("config/paper_two_robots.yaml");
+  const auto scenario = common::LoadScenario(scenario_path, {});
+  const std::string dir = testing::MakeTempDir("mrslam-agents");
+  const std::vector<std::string> common_args = {"--scenario", scenario_path, "--domain", std::to_string(kDomain),
+                                                "--set", "filter.particles=200"};
+
+  dds::Participant participant({kDomain, "agents_test", false});
+  std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> readers;
+  for (const auto& r : scenario.robots) {
+    readers[r.id] = std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id));
+  }
+  std::vector<std::unique_ptr<ChildProcess>> agents;
+  for (const auto& r : scenario.robots) {
+    auto args = common_args;
+    args.insert(args.begin(), BinPath("robot_agent"));
+    args.insert(args.end(), {"--robot", r.id});
+    agents.push_back(std::make_unique<ChildProcess>(args, dir + "/" + r.id + ".log"));
+  }
+  auto sim_args = common_args;
+  sim_args.insert(sim_args.begin(), BinPath("world_sim"));
+  ChildProcess sim(sim_args, dir + "/world_sim.log");
+
+  ASSERT_EQ(sim.WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(dir + "/world_sim.log");
+  for (std::size_t i = 0; i < agents.size(); ++i) {
+    const auto& id = scenario.robots[i].id;
+    EXPECT_EQ(agents[i]->WaitExit(seconds(30)), std::optional<int>(0)) << testing::ReadFile(dir + "/" + id + ".log");
+  }
+  for (const auto& r : scenario.robots) {
+    std::vector<std::uint32_t> steps;
+    msg::Estimate e;
+    while (readers[r.id]->Take(&e, milliseconds(500))) {
+      steps.push_back(e.stamp().step());
+      EXPECT_EQ(e.stamp().robot_id(), r.id);
+      EXPECT_TRUE(std::isfinite(e.pose().x_m()) && std::isfinite(e.pose().y_m()));
+      EXPECT_EQ(e.filter(), "fastslam");
+    }
+    ASSERT_EQ(steps.size(), static_cast<std::size_t>(scenario.run.steps)) << r.id;
+    for (std::size_t k = 0; k < steps.size(); ++k) EXPECT_EQ(steps[k], k + 1) << r.id;
+  }
+}
+
+TEST(AgentsLockstepTest, UnknownRobotIdIsAOneLineError) {
+  const std::string dir = testing::MakeTempDir("mrslam-agent-bad");
+  ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot",
+                      "r9", "--domain", std::to_string(kDomain + 1)},
+                     dir + "/agent.log");
+  const auto code = agent.WaitExit(seconds(20));
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 1);
+  const std::string log = testing::ReadFile(dir + "/agent.log");
+  EXPECT_THAT(log, ::testing::HasSubstr("unknown robot id 'r9'"));
+  EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
+}
+
+}  // namespace
+}  // namespace mrslam

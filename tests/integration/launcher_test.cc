@@ -1,0 +1,359 @@
+// Multi-process: mrslam_launch runs a whole scenario (evaluator, world_sim, one robot_agent per
+// robot) and writes the contracted outputs; a killed agent makes it stop everything and exit
+// non-zero naming the agent; SIGINT stops every child (exit 130); no process is left behind.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <dirent.h>
+#include <signal.h>
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "common/dds/participant.h"
+#include "mrslamPubSubTypes.h"
+#include "tests/integration/child_process.h"
+
+namespace mrslam {
+namespace {
+
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+using ::testing::HasSubstr;
+using testing::BinPath;
+using testing::ChildProcess;
+using testing::ReadFile;
+using testing::SourcePath;
+
+// This test's own DDS domains: 120..129.
+constexpr int kSummaryDomain = 120;
+constexpr int kKillDomain = 121;
+constexpr int kSigintDomain = 122;
+constexpr int kBadInputDomain = 123;
+constexpr int kSeedsDomain = 124;
+
+constexpr int kShortSteps = 12;
+
+// A process as /proc/<pid>/stat shows it.
+struct ProcInfo {
+  pid_t pid = 0;
+  pid_t ppid = 0;
+  pid_t pgid = 0;
+  char state = '?';
+};
+
+std::optional<ProcInfo> ReadProc(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  if (!std::getline(in, text)) return std::nullopt;
+  const auto close = text.rfind(')');  // the command name may hold spaces and parentheses
+  if (close == std::string::npos) return std::nullopt;
+  std::istringstream rest(text.substr(close + 1));
+  ProcInfo info;
+  info.pid = pid;
+  rest >> info.state >> info.ppid >> info.pgid;
+  return info;
+}
+
+std::string CommandLine(pid_t pid) {
+  std::string cmd = ReadFile("/proc/" + std::to_string(pid) + "/cmdline");
+  for (char& c : cmd) c = c == '\0' ? ' ' : c;
+  return cmd;
+}
+
+// The children of a process (from /proc), with their command lines.
+std::map<pid_t, std::string> ChildrenOf(pid_t parent) {
+  std::map<pid_t, std::string> children;
+  DIR* dir = opendir("/proc");
+  if (dir == nullptr) return children;
+  while (dirent* entry = readdir(dir)) {
+    char* end = nullptr;
+    const long pid = std::strtol(entry->d_name, &end, 10);
+    if (end == entry->d_name || *end != '\0') continue;
+    const auto info = ReadProc(static_cast<pid_t>(pid));
+    if (info && info->ppid == parent) children[info->pid] = CommandLine(info->pid);
+  }
+  closedir(dir);
+  return children;
+}
+
+// True when neither the processes nor any member of their process groups still exist.
+::testing::AssertionResult NoneLeft(const std::map<pid_t, std::string>& processes, const std::set<pid_t>& groups) {
+  for (const auto& [pid, cmd] : processes) {
+    if (ReadProc(pid)) return ::testing::AssertionFailure() << "process " << pid << " is still there: " << cmd;
+  }
+  for (const pid_t group : groups) {
+    if (kill(-group, 0) == 0 || errno != ESRCH) {
+      return ::testing::AssertionFailure() << "process group " << group << " still has members";
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+std::vector<std::string> LaunchArgs(const std::string& out, int domain, const std::vector<std::string>& extra) {
+  std::vector<std::string> argv = {BinPath("mrslam_launch"), "--scenario", SourcePath("config/paper_two_robots.yaml"),
+                                   "--out", out, "--domain", std::to_string(domain), "--set",
+                                   "filter.particles=100"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return argv;
+}
+
+bool HasMatplotlib() {
+  return std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") == 0;
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty()) lines.push_back(line);
+  }
+  return lines;
+}
+
+// Waits until the robot's estimate of at least `step` has been published (or the timeout, or
+// the launcher ended). True when seen.
+bool WaitForEstimateStep(int domain, const std::string& robot, std::uint32_t step, ChildProcess& launcher,
+                         seconds timeout) {
+  dds::Participant participant({domain, "launcher_test", false});
+  dds::Reader<msg::EstimatePubSubType> reader(participant, dds::EstimateTopic(robot));
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  msg::Estimate estimate;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (reader.Take(&estimate, milliseconds(100)) && estimate.stamp().step() >= step) return true;
+    if (launcher.WaitExit(milliseconds(0)).has_value()) return false;
+  }
+  return false;
+}
+
+// The launcher's children once all of them (evaluator, world_sim, one agent per robot) run.
+std::map<pid_t, std::string> WaitForChildren(pid_t launcher, std::size_t count, seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  auto children = ChildrenOf(launcher);
+  while (children.size() < count && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(milliseconds(20));
+    children = ChildrenOf(launcher);
+  }
+  return children;
+}
+
+std::set<pid_t> GroupsOf(const std::map<pid_t, std::string>& processes) {
+  std::set<pid_t> groups;
+  for (const auto& [pid, cmd] : processes) {
+    if (const auto info = ReadProc(pid)) groups.insert(info->pgid);
+  }
+  return groups;
+}
+
+void ExpectFiniteAtLeast(const nlohmann::json& robot, const std::string& key, double min, const std::string& id) {
+  ASSERT_TRUE(robot.contains(key)) << id << " lacks " << key;
+  ASSERT_TRUE(robot[key].is_number()) << id << "." << key << " = " << robot[key].dump();
+  const double v = robot[key].get<double>();
+  EXPECT_TRUE(std::isfinite(v)) << id << "." << key;
+  EXPECT_GE(v, min) << id << "." << key;
+}
+
+TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string out = testing::MakeTempDir("mrslam-launch-short");
+  ChildProcess launcher(LaunchArgs(out, kSummaryDomain, {"--set", "run.steps=" + std::to_string(kShortSteps)}),
+                        out + ".log");
+  ASSERT_TRUE(launcher.started());
+  ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + ".log");
+  const std::string output = ReadFile(out + ".log");
+
+  // summary.json: every key of DESIGN.md, plausible values.
+  nlohmann::json summary;
+  ASSERT_NO_THROW(summary = nlohmann::json::parse(ReadFile(out + "/summary.json"))) << output;
+  EXPECT_EQ(summary.value("scenario", ""), "paper_two_robots");
+  EXPECT_EQ(summary.value("seed", -1), 1);
+  EXPECT_EQ(summary.value("steps", -1), kShortSteps);
+  ASSERT_TRUE(summary.contains("wall_seconds"));
+  EXPECT_GT(summary["wall_seconds"].get<double>(), 0.0);
+  ASSERT_TRUE(summary.contains("robots"));
+  for (const std::string id : {"r1", "r2"}) {
+    ASSERT_TRUE(summary["robots"].contains(id)) << summary.dump(2);
+    const auto& r = summary["robots"][id];
+    ExpectFiniteAtLeast(r, "position_rmse_m", 1e-9, id);
+    ExpectFiniteAtLeast(r, "heading_rmse_deg", 1e-9, id);
+    ExpectFiniteAtLeast(r, "dead_reckoning_rmse_m", 1e-9, id);
+    ExpectFiniteAtLeast(r, "landmark_rmse_m", 0.0, id);
+    ExpectFiniteAtLeast(r, "landmarks_mapped", 0.0, id);
+    ExpectFiniteAtLeast(r, "map_completeness", 0.0, id);
+    EXPECT_LE(r["map_completeness"].get<double>(), 1.0) << id;
+    EXPECT_LT(r["position_rmse_m"].get<double>(), 20.0) << id;  // 12 steps of 0.65 m: a sanity bound
+    EXPECT_LT(r["heading_rmse_deg"].get<double>(), 180.0) << id;
+    ASSERT_TRUE(r.contains("frames_known") && r["frames_known"].is_array()) << id;
+    ASSERT_TRUE(r.contains("rendezvous") && r["rendezvous"].is_array()) << id;
+    for (const auto& event : r["rendezvous"]) {
+      EXPECT_TRUE(event.contains("peer") && event.contains("step") && event.contains("transform_error_m") &&
+                  event.contains("transform_error_deg"))
+          << event.dump();
+    }
+  }
+
+  // metrics.csv: the contracted columns, one row per robot and step.
+  const auto metrics = Lines(ReadFile(out + "/metrics.csv"));
+  ASSERT_FALSE(metrics.empty());
+  EXPECT_THAT(metrics[0], HasSubstr("step,time_s,robot,x_err_m,y_err_m,position_err_m,heading_err_deg,sigma_x_m"));
+  std::map<std::string, int> rows;
+  for (std::size_t i = 1; i < metrics.size(); ++i) {
+    std::vector<std::string> cells;
+    std::istringstream in(metrics[i]);
+    for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+    ASSERT_GE(cells.size(), 3u) << metrics[i];
+    ++rows[cells[2]];
+  }
+  EXPECT_EQ(rows["r1"], kShortSteps);
+  EXPECT_EQ(rows["r2"], kShortSteps);
+
+  // TUM trajectories: 8 numbers per line.
+  for (const std::string id : {"r1", "r2"}) {
+    for (const std::string kind : {"estimate", "truth"}) {
+      const std::string path = out + "/trajectories/" + id + "_" + kind + ".tum";
+      const auto lines = Lines(ReadFile(path));
+      int poses = 0;
+      for (const auto& line : lines) {
+        if (line[0] == '#') continue;
+        std::istringstream in(line);
+        std::vector<double> numbers;
+        for (double v; in >> v;) numbers.push_back(v);
+        EXPECT_TRUE(in.eof()) << path << ": not a number in '" << line << "'";
+        ASSERT_EQ(numbers.size(), 8u) << path << ": '" << line << "'";
+        for (double v : numbers) EXPECT_TRUE(std::isfinite(v)) << path << ": '" << line << "'";
+        const double q = std::hypot(std::hypot(numbers[4], numbers[5]), std::hypot(numbers[6], numbers[7]));
+        EXPECT_NEAR(q, 1.0, 1e-6) << path << ": quaternion not unit in '" << line << "'";
+        ++poses;
+      }
+      EXPECT_GE(poses, kShortSteps) << path;
+    }
+  }
+
+  // Logs of every process, and the printed summary table.
+  for (const std::string name : {"evaluator", "world_sim", "robot_agent_r1", "robot_agent_r2"}) {
+    EXPECT_TRUE(std::filesystem::exists(out + "/logs/" + name + ".log")) << name;
+  }
+  EXPECT_THAT(output, HasSubstr("position RMSE [m]"));
+  EXPECT_THAT(output, HasSubstr("dead reckoning RMSE [m]"));
+
+  // Plots (only where /usr/bin/python3 has matplotlib).
+  if (!HasMatplotlib()) GTEST_SKIP() << "/usr/bin/python3 lacks matplotlib: plots not checked";
+  for (const std::string name : {"trajectories.png", "errors.png", "overview.png"}) {
+    const std::string path = out + "/plots/" + name;
+    ASSERT_TRUE(std::filesystem::exists(path)) << path << "\n" << ReadFile(out + "/logs/plot_run.log");
+    EXPECT_GT(std::filesystem::file_size(path), 10000u) << path;
+    EXPECT_THAT(output, HasSubstr(path));
+  }
+  std::filesystem::remove_all(out);
+  std::filesystem::remove(out + ".log");
+}
+
+TEST(LauncherTest, KilledAgentStopsTheRunNamingItAndLeavesNoProcess) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string out = testing::MakeTempDir("mrslam-launch-kill");
+  // Long enough that the run is still going when the agent is killed right after step 3.
+  ChildProcess launcher(LaunchArgs(out, kKillDomain, {"--set", "run.steps=2000", "--no-plots"}), out + ".log");
+  ASSERT_TRUE(launcher.started());
+  ASSERT_TRUE(WaitForEstimateStep(kKillDomain, "r2", 3, launcher, seconds(120))) << ReadFile(out + ".log");
+  const auto children = WaitForChildren(launcher.pid(), 4, seconds(10));
+  ASSERT_EQ(children.size(), 4u);
+  pid_t victim = 0;
+  for (const auto& [pid, cmd] : children) {
+    if (cmd.find("robot_agent") != std::string::npos && cmd.find("--robot r2") != std::string::npos) victim = pid;
+  }
+  ASSERT_NE(victim, 0);
+  const auto groups = GroupsOf(children);
+  ASSERT_EQ(kill(victim, SIGKILL), 0);
+
+  const auto code = launcher.WaitExit(seconds(60));
+  ASSERT_TRUE(code.has_value()) << "the launcher did not stop";
+  EXPECT_NE(*code, 0);
+  EXPECT_NE(*code, 130);
+  const std::string output = ReadFile(out + ".log");
+  EXPECT_THAT(output, HasSubstr("robot_agent_r2"));
+  EXPECT_THAT(output, HasSubstr("signal 9"));
+  EXPECT_THAT(output, HasSubstr(out + "/logs/robot_agent_r2.log"));
+  EXPECT_TRUE(NoneLeft(children, groups));
+  std::filesystem::remove_all(out);
+  std::filesystem::remove(out + ".log");
+}
+
+TEST(LauncherTest, SigintStopsEveryChildAndExits130) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string out = testing::MakeTempDir("mrslam-launch-sigint");
+  ChildProcess launcher(LaunchArgs(out, kSigintDomain, {"--set", "run.steps=2000", "--no-plots"}), out + ".log");
+  ASSERT_TRUE(launcher.started());
+  ASSERT_TRUE(WaitForEstimateStep(kSigintDomain, "r1", 3, launcher, seconds(120))) << ReadFile(out + ".log");
+  const auto children = WaitForChildren(launcher.pid(), 4, seconds(10));
+  ASSERT_EQ(children.size(), 4u);
+  const auto groups = GroupsOf(children);
+  EXPECT_EQ(groups.size(), 1u) << "the children should share one process group";
+  EXPECT_EQ(groups.count(getpgrp()), 0u) << "the children should not be in the caller's process group";
+
+  launcher.Signal(SIGINT);
+  const auto code = launcher.WaitExit(seconds(60));
+  ASSERT_TRUE(code.has_value()) << "the launcher did not stop";
+  EXPECT_EQ(*code, 130) << ReadFile(out + ".log");
+  EXPECT_TRUE(NoneLeft(children, groups));
+  std::filesystem::remove_all(out);
+  std::filesystem::remove(out + ".log");
+}
+
+TEST(LauncherTest, BadScenarioExitsOneWithOneLineNamingTheKey) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string out = testing::MakeTempDir("mrslam-launch-bad");
+  ChildProcess launcher(LaunchArgs(out, kBadInputDomain, {"--set", "sensors.lidar.range_noise_sd_m=-1"}),
+                        out + ".log");
+  const auto code = launcher.WaitExit(seconds(30));
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 1);
+  const std::string output = ReadFile(out + ".log");
+  EXPECT_THAT(output, HasSubstr("mrslam_launch: error:"));
+  EXPECT_THAT(output, HasSubstr("sensors.lidar.range_noise_sd_m"));
+  EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 1) << output;
+  EXPECT_TRUE(ChildrenOf(launcher.pid()).empty());
+  std::filesystem::remove_all(out);
+  std::filesystem::remove(out + ".log");
+}
+
+TEST(LauncherTest, SeedsRunInTurnAndAggregate) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string out = testing::MakeTempDir("mrslam-launch-seeds");
+  ChildProcess launcher(LaunchArgs(out, kSeedsDomain, {"--set", "run.steps=6", "--seeds", "3..4", "--no-plots"}),
+                        out + ".log");
+  ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + ".log");
+  for (const int seed : {3, 4}) {
+    const auto s = nlohmann::json::parse(ReadFile(out + "/seed-" + std::to_string(seed) + "/summary.json"));
+    EXPECT_EQ(s.value("seed", -1), seed);
+  }
+  nlohmann::json aggregate;
+  ASSERT_NO_THROW(aggregate = nlohmann::json::parse(ReadFile(out + "/aggregate.json")));
+  EXPECT_EQ(aggregate["seeds"], nlohmann::json({3, 4}));
+  for (const std::string id : {"r1", "r2"}) {
+    for (const std::string metric :
+         {"position_rmse_m", "heading_rmse_deg", "landmark_rmse_m", "dead_reckoning_rmse_m", "map_completeness"}) {
+      const auto& m = aggregate["robots"][id][metric];
+      ASSERT_TRUE(m["median"].is_number()) << id << " " << metric << ": " << m.dump();
+      ASSERT_TRUE(m["p90"].is_number()) << id << " " << metric;
+      ASSERT_EQ(m["values"].size(), 2u);
+      const double a = m["values"][0].get<double>();
+      const double b = m["values"][1].get<double>();
+      EXPECT_NEAR(m["median"].get<double>(), (a + b) / 2, 1e-9) << id << " " << metric;
+      EXPECT_NEAR(m["p90"].get<double>(), std::min(a, b) + 0.9 * std::abs(a - b), 1e-9) << id << " " << metric;
+    }
+  }
+  EXPECT_THAT(ReadFile(out + ".log"), HasSubstr("median"));
+  std::filesystem::remove_all(out);
+  std::filesystem::remove(out + ".log");
+}
+
+}  // namespace
+}  // namespace mrslam

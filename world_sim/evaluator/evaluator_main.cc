@@ -1,0 +1,120 @@
+// evaluator: the only process besides world_sim that reads the truth. Scores every robot's
+// estimates in its own frame and writes metrics.csv, summary.json, TUM trajectories and tracks.csv.
+#include <chrono>
+#include <map>
+#include <memory>
+
+#include <spdlog/spdlog.h>
+
+#include "common/app.h"
+#include "common/dds/msg_conversion.h"
+#include "common/dds/participant.h"
+#include "common/logging.h"
+#include "mrslamPubSubTypes.h"
+#include "world_sim/evaluator/run_evaluator.h"
+
+namespace mrslam::evaluator {
+namespace {
+
+RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
+  RobotEstimate e;
+  e.step = m.stamp().step();
+  e.time_s = m.stamp().time_s();
+  e.pose = dds::FromMsg(m.pose());
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) e.covariance(r, c) = m.covariance()[static_cast<std::size_t>(3 * r + c)];
+  }
+  e.effective_sample_size = m.effective_sample_size();
+  for (const auto& l : m.landmarks()) {
+    if (l.tentative()) continue;
+    e.landmarks.push_back({Eigen::Vector2d(l.pose().x_m(), l.pose().y_m()), l.landmark_id()});
+  }
+  e.frames_known = m.frames_known();
+  for (const auto& r : m.rendezvous()) e.rendezvous.push_back({r.peer_id(), r.step(), dds::FromMsg(r.t_self_peer())});
+  return e;
+}
+
+// Owns the participant and readers; feeds the RunEvaluator until the run is complete.
+int Evaluate(const common::ScenarioOptions& scenario, int domain, bool shm, const std::string& out_dir,
+             const std::atomic<bool>& stop) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  dds::Participant participant({domain, "evaluator", shm});
+  dds::Notifier notifier;
+  dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic, &notifier);
+  std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimate_readers;
+  std::map<std::string, std::unique_ptr<dds::Reader<msg::OdometryPubSubType>>> odometry_readers;
+  for (const auto& r : scenario.robots) {
+    estimate_readers[r.id] =
+        std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id), &notifier);
+    odometry_readers[r.id] =
+        std::make_unique<dds::Reader<msg::OdometryPubSubType>>(participant, dds::OdometryTopic(r.id), &notifier);
+  }
+  RunEvaluator evaluator(scenario);
+  std::uint64_t seen = 0;
+  auto last_data = Clock::now();
+  const auto timeout = std::chrono::duration<double>(scenario.run.ack_timeout_s * 2.0);
+  spdlog::info("evaluating '{}' seed {} on domain {}", scenario.name, scenario.seed, domain);
+  while (!evaluator.Complete()) {
+    if (stop) {
+      spdlog::warn("stopped before the run was complete ({})", evaluator.Missing());
+      return 130;
+    }
+    bool got = false;
+    msg::GroundTruth t;
+    while (truth_reader.TryTake(&t)) {
+      evaluator.AddTruth(dds::FromMsg(t));
+      got = true;
+    }
+    for (auto& [id, reader] : estimate_readers) {
+      msg::Estimate e;
+      while (reader->TryTake(&e)) {
+        if (e.stamp().robot_id() != id) {
+          spdlog::warn("estimate on {}'s topic claims robot '{}': ignored", id, e.stamp().robot_id());
+          continue;
+        }
+        evaluator.AddEstimate(id, FromEstimateMsg(e));
+        got = true;
+      }
+    }
+    for (auto& [id, reader] : odometry_readers) {
+      msg::Odometry o;
+      while (reader->TryTake(&o)) {
+        evaluator.AddOdometry(id, dds::FromMsg(o));
+        got = true;
+      }
+    }
+    if (got) last_data = Clock::now();
+    if (Clock::now() - last_data > timeout) {
+      throw std::runtime_error("no data for " + std::to_string(timeout.count()) + " s; missing " + evaluator.Missing());
+    }
+    notifier.Wait(&seen, std::chrono::milliseconds(100));
+  }
+  const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+  const auto summary = evaluator.Write(out_dir, wall);
+  for (const auto& [id, r] : summary["robots"].items()) {
+    spdlog::info("{}: position RMSE {:.3f} m, heading RMSE {:.2f} deg, landmark RMSE {:.3f} m, dead reckoning {:.3f} m",
+                 id, r["position_rmse_m"].get<double>(), r["heading_rmse_deg"].get<double>(),
+                 r["landmark_rmse_m"].get<double>(), r["dead_reckoning_rmse_m"].get<double>());
+  }
+  spdlog::info("wrote {}/summary.json, metrics.csv, tracks.csv, trajectories/", out_dir);
+  return 0;
+}
+
+}  // namespace
+}  // namespace mrslam::evaluator
+
+int main(int argc, char** argv) {
+  using namespace mrslam;
+  CLI::App app{"mrslam evaluator: scores every robot's estimates against the ground truth"};
+  common::CommonFlags flags;
+  common::AddCommonFlags(app, &flags);
+  std::string out_dir;
+  app.add_option("--out", out_dir, "Output folder")->required();
+  return common::RunMain("evaluator", app, argc, argv, [&] {
+    common::SetupLogging("evaluator", flags.log_level);
+    const auto scenario = common::LoadScenarioFromFlags(flags);
+    const int domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
+    return evaluator::Evaluate(scenario, domain, flags.shared_memory, out_dir, common::InstallStopHandler());
+  });
+}

@@ -1,0 +1,63 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "common/config/scenario_options.h"
+#include "common/sensor_types.h"
+#include "world_sim/evaluator/metrics.h"
+
+namespace mrslam::evaluator {
+
+// A rendezvous as an agent reports it: T(G_self <- G_peer) at a step.
+struct RendezvousRecord {
+  std::string peer;
+  std::uint32_t step = 0;
+  common::Pose2 t_self_peer;
+};
+
+// One robot's estimate at one step, as the evaluator needs it (no filter types).
+struct RobotEstimate {
+  std::uint32_t step = 0;
+  double time_s = 0.0;
+  common::Pose2 pose;  // in the robot's own frame
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  double effective_sample_size = 0.0;
+  std::vector<MapPoint> landmarks;  // in the robot's own frame
+  std::vector<std::string> frames_known;
+  std::vector<RendezvousRecord> rendezvous;
+};
+
+// Scores a run: collects the truth and every robot's estimates and odometry by step, then
+// computes the per-step metrics (errors in each robot's own frame, through the true frame
+// pose) and the run summary of DESIGN.md, and writes metrics.csv, summary.json, TUM
+// trajectories and tracks.csv (everything in the first robot's frame, for plots). Pure: no DDS.
+class RunEvaluator {
+ public:
+  explicit RunEvaluator(const common::ScenarioOptions& scenario);
+
+  void AddTruth(const common::GroundTruth& truth);
+  void AddEstimate(const std::string& robot_id, const RobotEstimate& estimate);
+  void AddOdometry(const std::string& robot_id, const common::Odometry& odometry);
+
+  // True once the truth of steps 0..N and every robot's estimate of step N are in.
+  bool Complete() const;
+  // What is still missing (for a timeout message).
+  std::string Missing() const;
+
+  // Computes everything and writes the files into out_dir. Returns the summary.
+  nlohmann::json Write(const std::string& out_dir, double wall_seconds) const;
+
+ private:
+  common::ScenarioOptions scenario_;
+  std::map<std::uint32_t, common::GroundTruth> truth_;
+  std::map<std::string, std::map<std::uint32_t, RobotEstimate>> estimates_;
+  std::map<std::string, std::map<std::uint32_t, common::Odometry>> odometry_;
+};
+
+}  // namespace mrslam::evaluator
