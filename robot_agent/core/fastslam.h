@@ -1,0 +1,159 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/config/scenario_options.h"
+#include "common/rng.h"
+#include "common/sensor_types.h"
+#include "robot_agent/core/association.h"
+#include "robot_agent/core/landmark_ekf.h"
+#include "robot_agent/core/slam_filter.h"
+
+namespace mrslam::robot_agent {
+
+// FastSLAM (a Rao-Blackwellized particle filter) among moving landmarks, after paper A's
+// Algorithm 1 with the fixes of NOTES.md. Each particle owns a robot pose in the agent's frame
+// and a map of landmark EKFs of state dimension D (2: static, 3: unicycle with known (v, w),
+// 5: constant turn rate), stored in copy-on-write blocks of kLanes landmarks.
+//
+// One step (Process):
+//  1. Motion prior per particle: mu = UnicycleStep(pose, v, w, dt) from odometry (or the IMU),
+//     Sigma = Q = diag(noise.robot_process_var).
+//  2. Every landmark EKF is predicted with its kinematic model (paper A's modification 1:
+//     every step after first sight, seen or not). A landmark seen once has no heading yet: its
+//     position covariance grows by (s_max dt)^2 / 2 per axis per step (displacement of unknown
+//     direction at the largest speed s_max).
+//  3. Each detection (in range-bearing order: the scan's order carries no identity) is
+//     associated with the particle's landmarks on the predicted measurements: nearest unused
+//     landmark by squared Mahalanobis distance under S = H_m P H_m^T + H_x Sigma H_x^T + R;
+//     matched within the chi-square gate, new beyond the new-landmark gate, else ignored.
+//     Reported identities (landmark_id >= 0) are used directly.
+//  4. Proposal. FastSLAM 2.0 (default): each match updates the pose Gaussian like an EKF,
+//        K = Sigma H_x^T S^-1, mu += K nu, Sigma = (I - K H_x) Sigma,
+//     and the pose is sampled from N(mu, Sigma) after the last match. FastSLAM 1.0 samples the
+//     pose from the motion prior (Sigma = 0 in the gate).
+//     Weight: log w += log N(nu; 0, S) per match or ignored detection (S at the proposal before
+//     that match), and log N at the new-landmark gate (d2 = chi2(new_landmark_probability),
+//     S = H_x Sigma H_x^T + R) per new landmark.
+//  5. The matched landmark EKFs are updated at the sampled pose, all particles in one batch.
+//     A landmark's second sighting starts its full state: heading = direction of the
+//     displacement between the two sightings (for known candidates, the candidate model is
+//     sampled per particle by the likelihood of the displacement length; for constant turn
+//     rate, v = length / elapsed time), with covariances from the first-order propagation of
+//     both sightings. New landmarks start from the inverse sensor model.
+//  6. Landmarks expected in the field of view but not seen drop_after_misses times in a row
+//     are removed; a landmark is tentative until seen confirm_sightings times.
+//  7. Weights are normalized in the log domain; low-variance resampling when
+//     ESS < resample_ess_fraction * N (or every step).
+//
+// The reported map (Estimate): landmarks are identified by a track id allocated per detection
+// that created a landmark in some particle during that step, so every particle that created a
+// landmark from that detection holds it under the same id. A track is reported when the
+// particles holding it carry more than half of the total weight; its estimate is the weighted
+// mean over those particles (circular mean for heading) and the mixture covariance
+// sum w_p (P_p + d_p d_p^T) / sum w_p, d_p = mean_p - mean (heading difference wrapped), all
+// predicted to the current step (every landmark is predicted every step).
+//
+// Owns its particles, its random stream (derived from (seed, robot id)) and scratch buffers.
+// Not thread-safe; pure (no DDS, no wall clock).
+template <int D>
+class FastSlam : public SlamFilter {
+ public:
+  FastSlam(const common::ScenarioOptions& options, const std::string& robot_id, std::uint64_t seed);
+
+  void Process(const common::SensorStep& step) override;
+  FilterEstimate Estimate() const override;
+
+  // Introspection for tests and benchmarks.
+  int NumParticles() const { return static_cast<int>(particles_.size()); }
+  double ParticleWeight(int i) const;
+  int ParticleLandmarkCount(int i) const { return particles_[i].count; }
+  // Addresses of a particle's landmark blocks (shared between copies until written).
+  std::vector<const void*> LandmarkStorage(int i) const;
+
+ private:
+  using Block = LandmarkBlock<D>;
+  struct Particle {
+    common::Pose2 pose;
+    int count = 0;  // landmarks, in slots 0..count-1
+    std::vector<std::shared_ptr<Block>> blocks;
+  };
+  struct Detection {
+    double range_m = 0.0;
+    double bearing_rad = 0.0;
+    int landmark_id = -1;
+    int index = 0;  // position in the sorted scan
+  };
+  struct Segment {
+    double v_mps, w_radps, dt_s;
+  };
+  struct Match {
+    int slot;
+    int detection;
+  };
+
+  // Odometry or IMU -> motion segments for this step and their process noise variances.
+  void MotionFromStep(const common::SensorStep& step, std::vector<Segment>* segments,
+                      Eigen::Vector3d* variance);
+  // Steps 1-5 for one particle; queues its landmark updates in batch.
+  void ProposeParticle(int p, const std::vector<Segment>& segments, const Eigen::Vector3d& var,
+                       double dt, const std::vector<Detection>& detections, UpdateBatch<D>* batch);
+  // Step 6 for one particle.
+  void CountMisses(int p);
+  void Resample(const std::vector<double>& weights);
+  void EstimatePose(const std::vector<double>& weights);
+
+  Block* MutableBlock(Particle* particle, int b);
+  void PredictLandmarks(Particle* particle, double dt);
+  void CreateLandmark(Particle* particle, const common::Pose2& pose, const Detection& det);
+  void StartFullState(Block* block, int lane, const common::Pose2& pose, const Detection& det);
+  void RemoveLandmark(Particle* particle, int slot);
+  int FindIdentity(const Particle& particle, int landmark_id) const;
+  bool InView(const common::Pose2& pose, double x, double y) const;
+  // Position covariance of the point seen at (r, b) from pose: J R J^T.
+  Eigen::Matrix2d PointCovariance(const common::Pose2& pose, const Detection& det) const;
+
+  const common::FilterOptions filter_;
+  const common::LidarOptions lidar_;
+  const common::ImuOptions imu_;
+  const common::NoiseOptions noise_;
+  const double step_dt_s_;
+  const AssociationGates gates_;
+  const bool fastslam2_;
+  double var_r_, var_b_;
+  double q_[D];                             // landmark process noise per step
+  double unknown_heading_inflation_ = 0.0;  // (s_max dt)^2 / 2, for landmarks seen once
+  double log_new_d2_;     // chi2(new_landmark_probability), for the new-landmark weight
+  UpdateBatch<D> batch_;  // the landmark updates of a step, across particles
+
+  common::Rng rng_;
+  std::vector<Particle> particles_;
+  std::vector<double> log_weights_;
+  double last_ess_;
+  common::Pose2 pose_;  // estimate of the last step, from the weights before resampling
+  Eigen::Matrix3d pose_covariance_;
+  std::uint32_t step_ = 0;
+  double time_s_ = 0.0;
+  double imu_v_mps_ = 0.0;  // IMU motion source: velocity integrated from accel_x
+  double imu_v_var_ = 0.0;  // and its variance
+  std::uint32_t next_track_id_ = 1;
+  std::vector<std::uint32_t> creation_ids_;  // per detection of this step, 0 until used
+
+  // Scratch.
+  std::vector<double> d2_;
+  std::vector<std::uint8_t> used_;
+  std::vector<Match> matches_;
+  std::vector<int> creations_;
+};
+
+// The FastSLAM filter for the scenario's landmark kinematics (static: D = 2, known candidates:
+// D = 3, constant turn rate: D = 5).
+std::unique_ptr<SlamFilter> CreateFastSlam(const common::ScenarioOptions& options,
+                                           const std::string& robot_id, std::uint64_t seed);
+
+}  // namespace mrslam::robot_agent

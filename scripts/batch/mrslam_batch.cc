@@ -1,0 +1,216 @@
+// mrslam_batch: the accuracy of each robot's own filter over many seeds, in-process (World and
+// one filter per robot, no DDS). For every seed it runs the scenario to its end and computes
+// per robot (DESIGN.md's definitions, in the robot's own frame):
+//   position RMSE (m) and heading RMSE (deg) over every step,
+//   landmark RMSE (m): root of the mean over every step and every landmark in the map of the
+//     squared error against the true landmark it stands for (LandmarkErrors),
+//   dead-reckoning RMSE (m): odometry integrated from the known initial pose.
+// Prints the median and 90th percentile over seeds per robot, optionally writes them (and the
+// per-seed values) as JSON. Progress goes to stderr.
+//
+//   mrslam_batch --scenario FILE --seeds A..B [--set k=v]... [--particles N] [--threads T]
+//                [--json FILE]
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "common/angles.h"
+#include "common/config/scenario_options.h"
+#include "common/se2.h"
+#include "robot_agent/core/slam_filter.h"
+#include "world_sim/core/world.h"
+#include "world_sim/evaluator/metrics.h"
+
+namespace mrslam {
+namespace {
+
+// The metrics of one robot in one run.
+struct RobotRun {
+  double position_rmse_m = 0.0;
+  double heading_rmse_deg = 0.0;
+  double landmark_rmse_m = 0.0;
+  double dead_reckoning_rmse_m = 0.0;
+};
+
+constexpr const char* kMetricNames[] = {"position_rmse_m", "heading_rmse_deg", "landmark_rmse_m",
+                                        "dead_reckoning_rmse_m"};
+double Metric(const RobotRun& r, int i) {
+  switch (i) {
+    case 0:
+      return r.position_rmse_m;
+    case 1:
+      return r.heading_rmse_deg;
+    case 2:
+      return r.landmark_rmse_m;
+    default:
+      return r.dead_reckoning_rmse_m;
+  }
+}
+
+// Parses "A..B" (or "A") into an inclusive range.
+std::pair<std::uint64_t, std::uint64_t> ParseSeeds(const std::string& text) {
+  const std::size_t dots = text.find("..");
+  try {
+    if (dots == std::string::npos) {
+      const std::uint64_t s = std::stoull(text);
+      return {s, s};
+    }
+    const std::uint64_t a = std::stoull(text.substr(0, dots));
+    const std::uint64_t b = std::stoull(text.substr(dots + 2));
+    if (b < a) throw std::invalid_argument("empty");
+    return {a, b};
+  } catch (const std::exception&) {
+    throw std::runtime_error("--seeds must be A..B with A <= B, not '" + text + "'");
+  }
+}
+
+// Runs one seed: World + one filter per robot; returns the metrics per robot (scenario order).
+std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t seed) {
+  options.seed = seed;
+  world_sim::World world(options);
+  const std::size_t n = options.robots.size();
+  std::vector<std::unique_ptr<robot_agent::SlamFilter>> filters;
+  std::vector<common::Pose2> dead_reckoning;
+  for (const auto& robot : options.robots) {
+    filters.push_back(robot_agent::CreateFilter(options, robot.id, seed));
+    if (!filters.back())
+      throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
+    dead_reckoning.push_back(robot_agent::InitialPoseInOwnFrame(robot));
+  }
+  std::vector<std::vector<double>> position(n), heading(n), landmark(n), dr(n);
+  for (int k = 0; k < options.run.steps; ++k) {
+    const std::vector<common::SensorStep> steps = world.Step();
+    const common::GroundTruth truth = world.Truth();
+    std::vector<evaluator::TruePoint> true_landmarks;
+    for (const auto& l : truth.landmarks) {
+      true_landmarks.push_back({l.pose.Translation(), std::stoi(l.id)});
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const common::Pose2& frame = options.robots[i].frame_in_world;
+      const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
+      filters[i]->Process(steps[i]);
+      const robot_agent::FilterEstimate e = filters[i]->Estimate();
+      position[i].push_back(evaluator::PositionError(e.pose, truth_own));
+      heading[i].push_back(common::DegFromRad(evaluator::HeadingError(e.pose, truth_own)));
+      std::vector<evaluator::MapPoint> map;
+      for (const auto& l : e.landmarks) map.push_back({l.mean.head<2>(), l.landmark_id});
+      for (const double err : evaluator::LandmarkErrors(map, true_landmarks, frame)) {
+        landmark[i].push_back(err);
+      }
+      for (const auto& s : steps[i].odometry.segments) {
+        dead_reckoning[i] = common::UnicycleStep(dead_reckoning[i], s.v_mps, s.w_radps, s.dt_s);
+      }
+      dr[i].push_back(evaluator::PositionError(dead_reckoning[i], truth_own));
+    }
+  }
+  std::vector<RobotRun> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i].position_rmse_m = evaluator::Rmse(position[i]);
+    out[i].heading_rmse_deg = evaluator::Rmse(heading[i]);
+    out[i].landmark_rmse_m = landmark[i].empty() ? std::nan("") : evaluator::Rmse(landmark[i]);
+    out[i].dead_reckoning_rmse_m = evaluator::Rmse(dr[i]);
+  }
+  return out;
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"Accuracy of each robot's own filter over seeds (in-process, no DDS)."};
+  std::string scenario_path, seeds_text = "1..50", json_path;
+  std::vector<std::string> overrides;
+  int particles = 0, threads = 1;
+  app.add_option("--scenario", scenario_path, "Scenario YAML file")->required();
+  app.add_option("--seeds", seeds_text, "Seed range A..B (inclusive)");
+  app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
+  app.add_option("--particles", particles, "Particles per filter (overrides filter.particles)")
+      ->check(CLI::Range(1, 1000000));
+  app.add_option("--threads", threads, "Seeds run in parallel")->check(CLI::Range(1, 256));
+  app.add_option("--json", json_path, "Write medians, 90th percentiles and per-seed values here");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  const auto [first_seed, last_seed] = ParseSeeds(seeds_text);
+  common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);
+  if (particles > 0) options.filter.particles = particles;
+  const int num_seeds = static_cast<int>(last_seed - first_seed + 1);
+
+  // Worker threads take seeds from a shared counter; results land in seed order.
+  std::vector<std::vector<RobotRun>> results(num_seeds);
+  std::atomic<int> next{0};
+  std::atomic<int> done{0};
+  std::mutex error_mutex;
+  std::string error;
+  auto worker = [&]() {
+    for (int s = next++; s < num_seeds; s = next++) {
+      try {
+        results[s] = RunSeed(options, first_seed + s);
+      } catch (const std::exception& e) {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        error = e.what();
+        next = num_seeds;
+        return;
+      }
+      const int d = ++done;
+      const std::lock_guard<std::mutex> lock(error_mutex);
+      std::fprintf(stderr, "\rseeds done: %d/%d", d, num_seeds);
+      std::fflush(stderr);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::min(threads, num_seeds); ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  std::fprintf(stderr, "\n");
+  if (!error.empty()) throw std::runtime_error(error);
+
+  nlohmann::json json;
+  json["scenario"] = options.name;
+  json["seeds"] = {first_seed, last_seed};
+  json["particles"] = options.filter.particles;
+  json["filter"] = options.filter.type;
+  std::printf("scenario %s, seeds %llu..%llu, %s with %d particles\n", options.name.c_str(),
+              static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
+              static_cast<unsigned long long>(last_seed),   // NOLINT(runtime/int)
+              options.filter.type.c_str(), options.filter.particles);
+  std::printf("%-6s %-24s %10s %10s\n", "robot", "metric", "median", "p90");
+  for (std::size_t i = 0; i < options.robots.size(); ++i) {
+    const std::string& id = options.robots[i].id;
+    for (int m = 0; m < 4; ++m) {
+      std::vector<double> values;
+      for (const auto& r : results) values.push_back(Metric(r[i], m));
+      const double median = evaluator::Median(values), p90 = evaluator::Percentile(values, 90.0);
+      std::printf("%-6s %-24s %10.3f %10.3f\n", id.c_str(), kMetricNames[m], median, p90);
+      json["robots"][id][kMetricNames[m]] = {{"median", median}, {"p90", p90}, {"values", values}};
+    }
+  }
+  if (!json_path.empty()) {
+    std::ofstream out(json_path);
+    if (!out) throw std::runtime_error("cannot write " + json_path);
+    out << json.dump(2) << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace mrslam
+
+int main(int argc, char** argv) {
+  try {
+    return mrslam::Main(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mrslam_batch: %s\n", e.what());
+    return 1;
+  }
+}
