@@ -14,9 +14,12 @@ int main(int argc, char** argv) {
   std::string robot_id;
   std::string filter;
   int particles = -1;
+  int estimate_readers = 0;
   app.add_option("--robot", robot_id, "Robot id from the scenario (e.g. r1)")->required();
   app.add_option("--filter", filter, "fastslam, ekf or ekf_ela (overrides filter.type)");
   app.add_option("--particles", particles, "Number of particles (overrides filter.particles)");
+  app.add_option("--wait-readers", estimate_readers,
+                 "Before saying ready, wait until this many readers match the estimate topic");
   return common::RunMain("robot_agent", app, argc, argv, [&] {
     common::SetupLogging("robot_agent/" + robot_id, flags.log_level);
     if (!filter.empty()) flags.overrides.push_back("filter.type=" + filter);
@@ -32,6 +35,7 @@ int main(int argc, char** argv) {
     options.domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
     options.shared_memory = flags.shared_memory;
     options.timeout_s = scenario.run.ack_timeout_s;
+    options.estimate_readers = estimate_readers;
     const auto& stop = common::InstallStopHandler();
     robot_agent::AgentNode node(scenario, options, std::move(slam));
     return node.Run(stop) ? 0 : 130;

@@ -16,7 +16,10 @@ int main(int argc, char** argv) {
   common::AddCommonFlags(app, &flags);
   int steps = -1;
   std::string agents = "all";
+  int truth_readers = 0;
   app.add_option("--steps", steps, "Number of steps (overrides run.steps)");
+  app.add_option("--wait-readers", truth_readers,
+                 "Before step 1, wait until this many readers (the evaluator) match the truth topic");
   app.add_option("--agents", agents,
                  "Comma-separated agents in the lockstep barrier: 'all' (default) or 'none'");
   return common::RunMain("world_sim", app, argc, argv, [&] {
@@ -26,6 +29,7 @@ int main(int argc, char** argv) {
     world_sim::SimNodeOptions options;
     options.domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
     options.shared_memory = flags.shared_memory;
+    options.truth_readers = truth_readers;
     if (agents == "all") {
       for (const auto& r : scenario.robots) options.agents.push_back(r.id);
     } else if (agents != "none") {

@@ -320,6 +320,22 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     r.RejectUnknownKeys();
   }
 
+  {
+    Section c(top.Raw("cooperation"), "cooperation");
+    auto& d = o.cooperation;
+    d.map_fusion = c.GetEnum<MapFusionRule>(
+        "map_fusion", d.map_fusion,
+        {{"covariance_intersection", MapFusionRule::kCovarianceIntersection},
+         {"weighted", MapFusionRule::kWeighted},
+         {"average", MapFusionRule::kAverage}});
+    d.merge_maps = c.Get("merge_maps", d.merge_maps);
+    d.max_snapshot_landmarks = c.Get("max_snapshot_landmarks", d.max_snapshot_landmarks);
+    d.cooperative_localization = c.Get("cooperative_localization", d.cooperative_localization);
+    d.match_gate_probability = c.Get("match_gate_probability", d.match_gate_probability);
+    d.transform_gate_probability = c.Get("transform_gate_probability", d.transform_gate_probability);
+    c.RejectUnknownKeys();
+  }
+
   top.RejectUnknownKeys();
   return o;
 }
@@ -479,6 +495,13 @@ bool ScenarioOptions::IsValid(std::string* error) const {
   c.Check(rendezvous.window_steps >= 1, "rendezvous.window_steps", rendezvous.window_steps, "must be at least 1");
   c.Check(rendezvous.min_interval_steps >= 0, "rendezvous.min_interval_steps", rendezvous.min_interval_steps,
           "must not be negative");
+  const auto& co = cooperation;
+  c.Check(co.max_snapshot_landmarks >= 1 && co.max_snapshot_landmarks <= 100000,
+          "cooperation.max_snapshot_landmarks", co.max_snapshot_landmarks, "must be in 1..100000");
+  c.Check(co.match_gate_probability > 0.0 && co.match_gate_probability < 1.0,
+          "cooperation.match_gate_probability", co.match_gate_probability, "must be in (0, 1)");
+  c.Check(co.transform_gate_probability > 0.0 && co.transform_gate_probability < 1.0,
+          "cooperation.transform_gate_probability", co.transform_gate_probability, "must be in (0, 1)");
   return c.ok();
 }
 

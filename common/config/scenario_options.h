@@ -166,6 +166,22 @@ struct RendezvousOptions {
   int min_interval_steps = 20;  // between repeated rendezvous of one pair
 };
 
+// How an agent fuses a peer's landmark with its own matched landmark (README "cooperation").
+enum class MapFusionRule { kCovarianceIntersection, kWeighted, kAverage };
+
+// Cooperation among robots: frame transforms from mutual detections, map snapshots and their
+// merging, cooperative localization.
+struct CooperationOptions {
+  MapFusionRule map_fusion = MapFusionRule::kCovarianceIntersection;
+  bool merge_maps = true;              // send snapshots at a rendezvous and merge received ones
+  int max_snapshot_landmarks = 256;    // size bound of a snapshot; larger ones are rejected
+  bool cooperative_localization = false;  // mutual detections also correct the own pose
+  double match_gate_probability = 0.999;  // chi-square 2 dof gate, peer vs own landmark
+  // A mutual detection whose transform disagrees with the one held beyond this chi-square 3 dof
+  // gate is not fused (an outlier: e.g. a detection paired with the wrong robot).
+  double transform_gate_probability = 0.9999;
+};
+
 struct ScenarioOptions {
   std::string name;
   std::uint64_t seed = 1;
@@ -177,6 +193,7 @@ struct ScenarioOptions {
   NoiseOptions noise;
   FilterOptions filter;
   RendezvousOptions rendezvous;
+  CooperationOptions cooperation;
 
   // Range and cross-field checks; on failure *error names the key, the value and the rule.
   bool IsValid(std::string* error) const;

@@ -100,5 +100,8 @@ std::string ImuTopic(const std::string& robot_id) { return "mrslam/" + robot_id 
 std::string OdometryTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/odom"; }
 std::string EstimateTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/estimate"; }
 std::string AckTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/ack"; }
+std::string PeerTopic(const std::string& recipient_id, const std::string& kind) {
+  return "mrslam/peer/" + recipient_id + "/" + kind;
+}
 
 }  // namespace mrslam::dds

@@ -11,6 +11,7 @@
 #include <Eigen/LU>
 
 #include "common/gaussian.h"
+#include "robot_agent/core/map_fusion.h"
 #include "robot_agent/core/resampling.h"
 
 namespace mrslam::robot_agent {
@@ -639,6 +640,132 @@ FilterEstimate FastSlam<D>::Estimate() const {
     e.landmarks.push_back(m);
   }
   return e;
+}
+
+template <int D>
+int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapFusionRule rule,
+                                double gate_probability) {
+  if (in.empty()) return 0;
+  const double gate = common::ChiSquare2Quantile(gate_probability);
+  // A peer heading is used when it is known better than half the uniform variance.
+  const auto heading_known = [](const Eigen::Matrix3d& c) { return c(2, 2) < 0.5 * kUnknownHeadingVar; };
+  std::vector<MatchCandidate> incoming;
+  incoming.reserve(in.size());
+  for (const auto& l : in) {
+    incoming.push_back({l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id});
+  }
+  std::vector<std::uint32_t> new_ids(in.size(), 0);  // one track id per added landmark
+  std::vector<MatchCandidate> own;
+  for (Particle& particle : particles_) {
+    own.clear();
+    for (int s = 0; s < particle.count; ++s) {
+      const Block& b = *particle.blocks[s / kLanes];
+      const int l = s % kLanes;
+      Eigen::Matrix2d c;
+      c << b.Cov(0, 0, l), b.Cov(0, 1, l), b.Cov(0, 1, l), b.Cov(1, 1, l);
+      own.push_back({{b.Mean(0, l), b.Mean(1, l)}, c, b.meta[l].landmark_id});
+    }
+    const std::vector<int> match = MatchLandmarks(own, incoming, gate);
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      const MapLandmark& peer = in[i];
+      const bool peer_heading = D > 2 && heading_known(peer.covariance);
+      if (match[i] >= 0) {
+        Block* block = MutableBlock(&particle, match[i] / kLanes);
+        const int lane = match[i] % kLanes;
+        const bool fuse_heading = peer_heading && !block->meta[lane].position_only;
+        const int m = fuse_heading ? 3 : 2;
+        Eigen::VectorXd x = block->MeanVector(lane);
+        Eigen::MatrixXd p = block->CovMatrix(lane);
+        if (FuseObservation(&x, &p, peer.mean.head(m), peer.covariance.topLeftCorner(m, m), rule,
+                            fuse_heading ? 2 : -1)) {
+          block->Set(lane, x, p);
+        }
+        LandmarkMeta& meta = block->meta[lane];
+        if (meta.landmark_id < 0) meta.landmark_id = peer.landmark_id;
+        continue;
+      }
+      // Unmatched: a new landmark in this particle, from the peer's estimate.
+      const int slot = particle.count;
+      if (slot / kLanes == static_cast<int>(particle.blocks.size())) {
+        particle.blocks.push_back(std::make_shared<Block>());
+      }
+      Block* block = MutableBlock(&particle, slot / kLanes);
+      const int lane = slot % kLanes;
+      ++particle.count;
+      StateVector<D> mean = StateVector<D>::Zero();
+      StateMatrix<D> cov = StateMatrix<D>::Zero();
+      mean.template head<2>() = peer.mean.head<2>();
+      cov.template topLeftCorner<2, 2>() = peer.covariance.topLeftCorner<2, 2>();
+      if constexpr (D > 2) {
+        if (peer_heading) {
+          mean(2) = WrapAngle(peer.mean(2));
+          cov.template topLeftCorner<3, 3>() = peer.covariance;
+        }
+      }
+      if constexpr (D == 3) {
+        block->field[Block::kParamV][lane] = peer_heading ? peer.v_mps : 0.0;
+        block->field[Block::kParamW][lane] = peer_heading ? peer.w_radps : 0.0;
+      }
+      if constexpr (D == 5) {
+        if (peer_heading) {
+          // The snapshot carries no speed or turn-rate variances: the priors of a new state.
+          const double s_max = MaxLandmarkSpeed(filter_);
+          mean(3) = peer.v_mps;
+          mean(4) = peer.w_radps;
+          cov(3, 3) = 0.25 * s_max * s_max + q_[3];
+          cov(4, 4) = filter_.landmark_turn_rate_prior_sd_radps * filter_.landmark_turn_rate_prior_sd_radps;
+        }
+      }
+      block->Set(lane, mean, cov);
+      std::uint32_t& id = new_ids[i];
+      if (id == 0) id = next_track_id_++;
+      LandmarkMeta& meta = block->meta[lane];
+      meta = LandmarkMeta{};
+      meta.track_id = id;
+      meta.landmark_id = peer.landmark_id;
+      meta.first_seen_step = step_;
+      meta.last_seen_step = std::min(step_, peer.last_seen_step);
+      meta.sightings = static_cast<std::uint16_t>(std::max(1, filter_.confirm_sightings));
+      meta.position_only = D > 2 && !peer_heading;
+      if constexpr (D == 3) {
+        // The known candidate nearest the peer's (v, w).
+        double best = std::numeric_limits<double>::infinity();
+        for (std::size_t c = 0; c < filter_.known_kinematics.size() && peer_heading; ++c) {
+          const double d = std::abs(filter_.known_kinematics[c].v_mps - peer.v_mps) +
+                           std::abs(filter_.known_kinematics[c].w_radps - peer.w_radps);
+          if (d < best) {
+            best = d;
+            meta.candidate = static_cast<std::int8_t>(c);
+          }
+        }
+      }
+    }
+  }
+  int added = 0;
+  for (const std::uint32_t id : new_ids) added += id != 0 ? 1 : 0;
+  return added;
+}
+
+template <int D>
+bool FastSlam<D>::ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen::Matrix2d& covariance,
+                                    double range_m, double bearing_rad) {
+  if (!position.allFinite() || !covariance.allFinite() || !std::isfinite(range_m) || !std::isfinite(bearing_rad)) {
+    return false;
+  }
+  for (int p = 0; p < NumParticles(); ++p) {
+    const Pose2& x = particles_[p].pose;
+    const double dx = position.x() - x.x, dy = position.y() - x.y;
+    const double q = std::max(dx * dx + dy * dy, 1e-12), r = std::sqrt(q);
+    Eigen::Matrix2d h;
+    h << dx / r, dy / r, -dy / q, dx / q;
+    Eigen::Matrix2d s = h * covariance * h.transpose();
+    s(0, 0) += var_r_;
+    s(1, 1) += var_b_;
+    const Eigen::Vector2d nu(range_m - r, WrapAngle(bearing_rad - (std::atan2(dy, dx) - x.heading)));
+    log_weights_[p] += common::LogGaussian2(nu, s);
+  }
+  NormalizeLogWeights(&log_weights_);
+  return true;
 }
 
 template class FastSlam<2>;

@@ -68,6 +68,17 @@ class FastSlam : public SlamFilter {
 
   void Process(const common::SensorStep& step) override;
   FilterEstimate Estimate() const override;
+  // Map merging (SlamFilter): per particle, incoming landmarks are matched to the particle's
+  // (MatchLandmarks: identities, else Mahalanobis on position); a match is fused by rule
+  // (FuseObservation on position, plus heading when both have one); the others are added to
+  // every particle under one new track id each, confirmed (the peer confirmed them). Blocks
+  // are written through MutableBlock, so copy-on-write sharing stays intact.
+  int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
+                     double gate_probability) override;
+  // Cooperative localization: log w_p += log N(z - h(pose_p, position); 0, H C H^T + R), with
+  // H = d(range, bearing)/d(position) and R the lidar noise.
+  bool ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen::Matrix2d& covariance, double range_m,
+                         double bearing_rad) override;
 
   // Introspection for tests and benchmarks.
   int NumParticles() const { return static_cast<int>(particles_.size()); }

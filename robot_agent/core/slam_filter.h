@@ -47,6 +47,23 @@ class SlamFilter {
   // Predicts with the step's odometry or IMU and corrects with its lidar scan.
   virtual void Process(const common::SensorStep& step) = 0;
   virtual FilterEstimate Estimate() const = 0;
+
+  // Merges landmarks given in the agent's own frame (a peer's map after the frame transform,
+  // predicted to the filter's current step). In every hypothesis (particle), each incoming
+  // landmark is gated against the own landmarks (squared Mahalanobis distance of the positions
+  // under the sum of their covariances within the chi-square 2 dof quantile of gate_probability;
+  // reported identities decide when both carry one); matched landmarks are fused by rule
+  // (map_fusion.h), unmatched ones are added. Returns how many landmarks were added.
+  virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame,
+                             common::MapFusionRule rule, double gate_probability) = 0;
+
+  // Cooperative localization: at the current step this robot detected, at (range_m,
+  // bearing_rad), a robot whose position in the own frame is N(position, covariance). A filter
+  // that supports it weighs its pose hypotheses by that measurement; returns false otherwise.
+  virtual bool ObserveKnownRobot(const Eigen::Vector2d& /*position*/, const Eigen::Matrix2d& /*covariance*/,
+                                 double /*range_m*/, double /*bearing_rad*/) {
+    return false;
+  }
 };
 
 // The robot's initial pose in its own frame G_i: inverse(frame_in_world) * initial_pose.

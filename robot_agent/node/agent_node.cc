@@ -1,13 +1,16 @@
 #include "robot_agent/node/agent_node.h"
 
+#include <algorithm>
 #include <chrono>
 #include <map>
+#include <tuple>
 
 #include <spdlog/spdlog.h>
 
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
+#include "robot_agent/core/cooperation.h"
 #include "robot_agent/core/sample_validation.h"
 #include "robot_agent/node/msg_conversion.h"
 
@@ -16,6 +19,16 @@ namespace mrslam::robot_agent {
 namespace {
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
+
+// Writers into one peer's inbox, created when the agent first sends to that peer.
+struct PeerWriters {
+  PeerWriters(dds::Participant& p, const std::string& peer)
+      : relative(p, dds::PeerTopic(peer, "relative")), map(p, dds::PeerTopic(peer, "map")),
+        moved(p, dds::PeerTopic(peer, "moved")) {}
+  dds::Writer<msg::RelativeMeasurementPubSubType> relative;
+  dds::Writer<msg::MapSnapshotPubSubType> map;
+  dds::Writer<msg::LandmarkMovedNoticePubSubType> moved;
+};
 }  // namespace
 
 struct AgentNode::Impl {
@@ -30,6 +43,16 @@ struct AgentNode::Impl {
   dds::Reader<msg::StepClockPubSubType> clock_reader;
   dds::Writer<msg::EstimatePubSubType> estimate_writer;
   dds::Writer<msg::StepAckPubSubType> ack_writer;
+  // This agent's inbox (peer to peer) and, lazily, writers into the peers' inboxes.
+  dds::Reader<msg::RelativeMeasurementPubSubType> relative_inbox;
+  dds::Reader<msg::MapSnapshotPubSubType> map_inbox;
+  dds::Reader<msg::LandmarkMovedNoticePubSubType> moved_inbox;
+  std::map<std::string, std::unique_ptr<PeerWriters>> peers;
+  Cooperation cooperation;
+  // Peer messages received, by the sender's step: applied at the start of the next step.
+  std::map<std::uint32_t, PeerInbox> inbox;
+  std::map<std::pair<std::string, std::uint32_t>, std::uint32_t> received;  // (sender, step) -> count
+  std::map<std::string, std::uint32_t> sent_sequence;
   AgentCounters counters;
   std::uint32_t next_step = 1;
   // Samples buffered by step until the step is complete.
@@ -48,7 +71,11 @@ struct AgentNode::Impl {
         odometry_reader(participant, dds::OdometryTopic(o.robot_id), &notifier),
         clock_reader(participant, dds::kClockTopic, &notifier),
         estimate_writer(participant, dds::EstimateTopic(o.robot_id)),
-        ack_writer(participant, dds::AckTopic(o.robot_id)) {}
+        ack_writer(participant, dds::AckTopic(o.robot_id)),
+        relative_inbox(participant, dds::PeerTopic(o.robot_id, "relative"), &notifier),
+        map_inbox(participant, dds::PeerTopic(o.robot_id, "map"), &notifier),
+        moved_inbox(participant, dds::PeerTopic(o.robot_id, "moved"), &notifier),
+        cooperation(s, o.robot_id) {}
 
   void Reject(const std::string& why) {
     ++counters.rejected_samples;
@@ -85,19 +112,114 @@ struct AgentNode::Impl {
     while (clock_reader.TryTake(&c)) {
       if (c.stamp().step() >= next_step) clock[c.stamp().step()] = c;
     }
+    msg::RelativeMeasurement r;
+    while (relative_inbox.TryTake(&r)) AcceptPeer(FromMsg(r), &PeerInbox::measurements);
+    msg::MapSnapshot ms;
+    while (map_inbox.TryTake(&ms)) AcceptPeer(FromMsg(ms), &PeerInbox::maps);
+    msg::LandmarkMovedNotice n;
+    while (moved_inbox.TryTake(&n)) AcceptPeer(FromMsg(n), &PeerInbox::moved);
   }
 
-  void Acknowledge(std::uint32_t step, double time_s) {
+  // Buffers a peer message for the start of the step after the one it was sent in, or rejects
+  // it (not for us, unknown sender, a step already past).
+  template <typename T>
+  void AcceptPeer(T message, std::vector<T> PeerInbox::*list) {
+    const auto& h = message.header;
+    if (h.recipient != options.robot_id) {
+      Reject("peer message for '" + h.recipient + "' in " + options.robot_id + "'s inbox");
+      return;
+    }
+    if (scenario.RobotIndex(h.sender) < 0 || h.sender == options.robot_id) {
+      Reject("peer message from unknown robot '" + h.sender + "'");
+      return;
+    }
+    if (h.step + 1 < next_step) {
+      Reject("stale peer message of step " + std::to_string(h.step) + " from " + h.sender);
+      return;
+    }
+    ++received[{h.sender, h.step}];
+    (inbox[h.step].*list).push_back(std::move(message));
+  }
+
+  // True when every peer message the clock of step k announces (sent during step k-1) is here.
+  bool PeerMessagesComplete(const msg::StepClock& c) const {
+    for (const auto& d : c.peer_deliveries()) {
+      if (d.recipient_id() != options.robot_id) continue;
+      const auto it = received.find({d.sender_id(), c.stamp().step() - 1});
+      if ((it == received.end() ? 0U : it->second) < d.count()) return false;
+    }
+    return true;
+  }
+
+  template <typename W, typename M>
+  void SendTo(W& writer, const M& message, const std::string& peer, std::map<std::string, std::uint32_t>* counts) {
+    if (!writer.Write(message)) throw AgentError("DDS refused a peer message to " + peer);
+    ++(*counts)[peer];
+  }
+
+  // Sends the outbox of a step; returns the number of messages per recipient.
+  std::map<std::string, std::uint32_t> Send(PeerOutbox outbox) {
+    std::map<std::string, std::uint32_t> counts;
+    auto writers = [&](const std::string& peer) -> PeerWriters& {
+      auto& w = peers[peer];
+      if (!w) w = std::make_unique<PeerWriters>(participant, peer);
+      return *w;
+    };
+    auto stamp = [&](PeerHeader* h) { h->sequence = ++sent_sequence[h->recipient]; };
+    for (auto& m : outbox.measurements) {
+      stamp(&m.header);
+      SendTo(writers(m.header.recipient).relative, ToMsg(m), m.header.recipient, &counts);
+    }
+    for (auto& m : outbox.maps) {
+      stamp(&m.header);
+      SendTo(writers(m.header.recipient).map, ToMsg(m), m.header.recipient, &counts);
+      spdlog::info("sent a map snapshot of {} landmarks to {}", m.landmarks.size(), m.header.recipient);
+    }
+    for (auto& m : outbox.moved) {
+      stamp(&m.header);
+      SendTo(writers(m.header.recipient).moved, ToMsg(m), m.header.recipient, &counts);
+    }
+    return counts;
+  }
+
+  void Acknowledge(std::uint32_t step, double time_s, const std::map<std::string, std::uint32_t>& sent = {}) {
     msg::StepAck ack;
     ack.stamp(dds::ToMsg(common::Stamp{options.robot_id, step, time_s}));
+    for (const auto& [peer, count] : sent) {
+      msg::PeerCount pc;
+      pc.peer_id(peer);
+      pc.count(count);
+      ack.peer_messages_sent().push_back(pc);
+    }
     ack.rejected_samples(static_cast<std::uint32_t>(counters.rejected_samples));
     if (!ack_writer.Write(ack)) throw AgentError("DDS refused to publish the acknowledgement of step " + std::to_string(step));
+  }
+
+  static void SortBySender(PeerInbox* in) {
+    auto order = [](const auto& a, const auto& b) {
+      return std::tie(a.header.sender, a.header.sequence) < std::tie(b.header.sender, b.header.sequence);
+    };
+    std::sort(in->measurements.begin(), in->measurements.end(), order);
+    std::sort(in->maps.begin(), in->maps.end(), order);
+    std::sort(in->moved.begin(), in->moved.end(), order);
   }
 
   // Processes the next step if all of it is here. Returns true if it did.
   bool TryProcess(bool* last) {
     const std::uint32_t k = next_step;
     if (!clock.count(k) || !lidar.count(k) || !imu.count(k) || !odometry.count(k)) return false;
+    if (!PeerMessagesComplete(clock[k])) return false;
+    // Peer messages of step k-1 first, in a fixed order (sender, then sequence).
+    if (auto it = inbox.find(k - 1); it != inbox.end()) {
+      SortBySender(&it->second);
+      const int before = cooperation.rejected_messages();
+      cooperation.Receive(it->second, filter.get());
+      if (const int bad = cooperation.rejected_messages() - before; bad > 0) {
+        counters.rejected_samples += bad;
+        spdlog::warn("rejected {} peer message(s) of step {}", bad, k - 1);
+      }
+      inbox.erase(it);
+    }
     common::SensorStep step{std::move(lidar[k]), std::move(imu[k]), std::move(odometry[k])};
     *last = clock[k].last_step();
     const double time_s = clock[k].stamp().time_s();
@@ -107,10 +229,19 @@ struct AgentNode::Impl {
     clock.erase(k);
     filter->Process(step);
     const FilterEstimate estimate = filter->Estimate();
+    const std::size_t rendezvous_before = cooperation.rendezvous().size();
+    const auto sent = Send(cooperation.AfterStep(step.lidar, estimate));
+    for (std::size_t i = rendezvous_before; i < cooperation.rendezvous().size(); ++i) {
+      const auto& e = cooperation.rendezvous()[i];
+      spdlog::info("rendezvous with {} at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)", e.peer, e.step,
+                   options.robot_id, e.peer, e.t_self_peer.x, e.t_self_peer.y, e.t_self_peer.heading);
+    }
     msg::Estimate m = ToMsg(estimate, options.robot_id, scenario.filter.type);
+    for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
+    m.frames_known(cooperation.frames_known());
     m.rejected_samples(static_cast<std::uint32_t>(counters.rejected_samples));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));
-    Acknowledge(k, time_s);
+    Acknowledge(k, time_s, sent);
     ++counters.steps_processed;
     ++next_step;
     return true;
@@ -127,11 +258,20 @@ const AgentCounters& AgentNode::counters() const { return impl_->counters; }
 
 bool AgentNode::Run(const std::atomic<bool>& stop) {
   Impl& a = *impl_;
+  std::uint64_t seen = 0;
+  const auto timeout = std::chrono::duration<double>(a.options.timeout_s);
+  const auto start = Clock::now();
+  while (a.estimate_writer.MatchedReaders() < a.options.estimate_readers) {
+    if (stop) return false;
+    if (Clock::now() - start > timeout) {
+      throw AgentError("only " + std::to_string(a.estimate_writer.MatchedReaders()) + " of " +
+                       std::to_string(a.options.estimate_readers) + " estimate readers matched");
+    }
+    a.notifier.Wait(&seen, milliseconds(5));
+  }
   a.Acknowledge(0, 0.0);  // ready: every reader exists
   spdlog::info("agent {} ready ({} filter)", a.options.robot_id, a.scenario.filter.type);
-  std::uint64_t seen = 0;
   auto last_progress = Clock::now();
-  const auto timeout = std::chrono::duration<double>(a.options.timeout_s);
   while (!stop) {
     a.Drain();
     bool last = false;

@@ -21,6 +21,8 @@ struct AgentNodeOptions {
   int domain = 0;
   bool shared_memory = false;
   double timeout_s = 30.0;  // no new step for this long is an error
+  // Before saying "ready", wait until this many readers have matched the estimate topic.
+  int estimate_readers = 0;
 };
 
 // Counters of what the agent rejected (each also logged as a warning).

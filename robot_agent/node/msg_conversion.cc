@@ -19,7 +19,59 @@ Eigen::Matrix3d FromArray(const std::array<double, 9>& a) {
   }
   return m;
 }
+msg::Stamp HeaderStamp(const PeerHeader& h) { return dds::ToMsg(common::Stamp{h.sender, h.step, h.time_s}); }
+PeerHeader HeaderFrom(const msg::Stamp& s, const std::string& recipient, std::uint32_t sequence) {
+  return {s.robot_id(), recipient, s.step(), s.time_s(), sequence};
+}
 }  // namespace
+
+msg::LandmarkEstimate ToMsg(const MapLandmark& l) {
+  msg::LandmarkEstimate m;
+  m.track_id(l.track_id);
+  m.landmark_id(l.landmark_id);
+  m.pose(dds::ToMsg(common::Pose2{l.mean.x(), l.mean.y(), l.mean.z()}));
+  m.covariance(ToArray(l.covariance));
+  m.v_mps(l.v_mps);
+  m.w_radps(l.w_radps);
+  m.motion_model(static_cast<std::uint8_t>(l.motion));
+  m.moving(l.moving);
+  m.tentative(l.tentative);
+  m.last_seen_step(l.last_seen_step);
+  return m;
+}
+
+MapLandmark FromMsg(const msg::LandmarkEstimate& m) {
+  MapLandmark l;
+  l.track_id = m.track_id();
+  l.landmark_id = m.landmark_id();
+  l.mean = {m.pose().x_m(), m.pose().y_m(), m.pose().heading_rad()};
+  l.covariance = FromArray(m.covariance());
+  l.v_mps = m.v_mps();
+  l.w_radps = m.w_radps();
+  l.motion = static_cast<LandmarkMotionKind>(m.motion_model());
+  l.moving = m.moving();
+  l.tentative = m.tentative();
+  l.last_seen_step = m.last_seen_step();
+  return l;
+}
+
+msg::RendezvousEvent ToMsg(const RendezvousEvent& e) {
+  msg::RendezvousEvent m;
+  m.peer_id(e.peer);
+  m.step(e.step);
+  m.t_self_peer(dds::ToMsg(e.t_self_peer));
+  m.covariance(ToArray(e.covariance));
+  return m;
+}
+RendezvousEvent FromMsg(const msg::RendezvousEvent& m) {
+  return {m.peer_id(), m.step(), dds::FromMsg(m.t_self_peer()), FromArray(m.covariance())};
+}
+msg::RendezvousEvent ToMsg(const FrameTransform& t) {
+  return ToMsg(RendezvousEvent{t.peer, t.step, t.t_self_peer, t.covariance});
+}
+FrameTransform TransformFromMsg(const msg::RendezvousEvent& m) {
+  return {m.peer_id(), m.step(), dds::FromMsg(m.t_self_peer()), FromArray(m.covariance())};
+}
 
 msg::Estimate ToMsg(const FilterEstimate& e, const std::string& robot_id, const std::string& filter) {
   msg::Estimate m;
@@ -29,20 +81,7 @@ msg::Estimate ToMsg(const FilterEstimate& e, const std::string& robot_id, const 
   m.covariance(ToArray(e.covariance));
   m.effective_sample_size(e.effective_sample_size);
   m.particles(static_cast<std::uint32_t>(e.particles));
-  for (const auto& l : e.landmarks) {
-    msg::LandmarkEstimate ml;
-    ml.track_id(l.track_id);
-    ml.landmark_id(l.landmark_id);
-    ml.pose(dds::ToMsg(common::Pose2{l.mean.x(), l.mean.y(), l.mean.z()}));
-    ml.covariance(ToArray(l.covariance));
-    ml.v_mps(l.v_mps);
-    ml.w_radps(l.w_radps);
-    ml.motion_model(static_cast<std::uint8_t>(l.motion));
-    ml.moving(l.moving);
-    ml.tentative(l.tentative);
-    ml.last_seen_step(l.last_seen_step);
-    m.landmarks().push_back(ml);
-  }
+  for (const auto& l : e.landmarks) m.landmarks().push_back(ToMsg(l));
   return m;
 }
 
@@ -54,22 +93,67 @@ FilterEstimate FromMsg(const msg::Estimate& m) {
   e.covariance = FromArray(m.covariance());
   e.effective_sample_size = m.effective_sample_size();
   e.particles = static_cast<int>(m.particles());
-  for (const auto& ml : m.landmarks()) {
-    MapLandmark l;
-    l.track_id = ml.track_id();
-    l.landmark_id = ml.landmark_id();
-    const auto p = dds::FromMsg(ml.pose());
-    l.mean = {p.x, p.y, p.heading};
-    l.covariance = FromArray(ml.covariance());
-    l.v_mps = ml.v_mps();
-    l.w_radps = ml.w_radps();
-    l.motion = static_cast<LandmarkMotionKind>(ml.motion_model());
-    l.moving = ml.moving();
-    l.tentative = ml.tentative();
-    l.last_seen_step = ml.last_seen_step();
-    e.landmarks.push_back(l);
-  }
+  for (const auto& ml : m.landmarks()) e.landmarks.push_back(FromMsg(ml));
   return e;
+}
+
+msg::RelativeMeasurement ToMsg(const RelativeMeasurement& r) {
+  msg::RelativeMeasurement m;
+  m.stamp(HeaderStamp(r.header));
+  m.recipient_id(r.header.recipient);
+  m.sequence_number(r.header.sequence);
+  m.has_range(r.has_range);
+  m.range_m(r.range_m);
+  m.bearing_rad(r.bearing_rad);
+  m.sender_pose(dds::ToMsg(r.sender_pose));
+  m.sender_covariance(ToArray(r.sender_covariance));
+  return m;
+}
+RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
+  RelativeMeasurement r;
+  r.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
+  r.has_range = m.has_range();
+  r.range_m = m.range_m();
+  r.bearing_rad = m.bearing_rad();
+  r.sender_pose = dds::FromMsg(m.sender_pose());
+  r.sender_covariance = FromArray(m.sender_covariance());
+  return r;
+}
+
+msg::MapSnapshot ToMsg(const MapSnapshot& s) {
+  msg::MapSnapshot m;
+  m.stamp(HeaderStamp(s.header));
+  m.recipient_id(s.header.recipient);
+  m.sequence_number(s.header.sequence);
+  for (const auto& l : s.landmarks) m.landmarks().push_back(ToMsg(l));
+  for (const auto& t : s.known_transforms) m.known_transforms().push_back(ToMsg(t));
+  return m;
+}
+MapSnapshot FromMsg(const msg::MapSnapshot& m) {
+  MapSnapshot s;
+  s.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
+  for (const auto& l : m.landmarks()) s.landmarks.push_back(FromMsg(l));
+  for (const auto& t : m.known_transforms()) s.known_transforms.push_back(TransformFromMsg(t));
+  return s;
+}
+
+msg::LandmarkMovedNotice ToMsg(const LandmarkMovedNotice& n) {
+  msg::LandmarkMovedNotice m;
+  m.stamp(HeaderStamp(n.header));
+  m.recipient_id(n.header.recipient);
+  m.sequence_number(n.header.sequence);
+  m.track_id(n.track_id);
+  m.landmark_id(n.landmark_id);
+  m.position_in_sender(dds::ToMsg(common::Pose2{n.position_in_sender.x(), n.position_in_sender.y(), 0.0}));
+  return m;
+}
+LandmarkMovedNotice FromMsg(const msg::LandmarkMovedNotice& m) {
+  LandmarkMovedNotice n;
+  n.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
+  n.track_id = m.track_id();
+  n.landmark_id = m.landmark_id();
+  n.position_in_sender = {m.position_in_sender().x_m(), m.position_in_sender().y_m()};
+  return n;
 }
 
 }  // namespace mrslam::robot_agent

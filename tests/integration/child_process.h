@@ -70,14 +70,15 @@ class ChildProcess {
   std::optional<int> exit_code_;
 };
 
-// Path of a built executable (MRSLAM_BIN_DIR is set by the test registration).
+// Path of a built executable and of a file in the source tree (compiled in by the test
+// registration; MRSLAM_BIN_DIR / MRSLAM_SOURCE_DIR override them).
 inline std::string BinPath(const std::string& name) {
   const char* dir = std::getenv("MRSLAM_BIN_DIR");
-  return std::string(dir != nullptr ? dir : "build/bin") + "/" + name;
+  return std::string(dir != nullptr ? dir : MRSLAM_TEST_BIN_DIR) + "/" + name;
 }
 inline std::string SourcePath(const std::string& rel) {
   const char* dir = std::getenv("MRSLAM_SOURCE_DIR");
-  return std::string(dir != nullptr ? dir : ".") + "/" + rel;
+  return std::string(dir != nullptr ? dir : MRSLAM_TEST_SOURCE_DIR) + "/" + rel;
 }
 
 // Reads a whole text file (empty if missing).

@@ -27,9 +27,9 @@ namespace {
 
 using std::chrono::milliseconds;
 using std::chrono::seconds;
-using ::testing::HasSubstr;
 using testing::BinPath;
 using testing::ChildProcess;
+using ::testing::HasSubstr;
 using testing::ReadFile;
 using testing::SourcePath;
 
@@ -99,16 +99,20 @@ std::map<pid_t, std::string> ChildrenOf(pid_t parent) {
 }
 
 std::vector<std::string> LaunchArgs(const std::string& out, int domain, const std::vector<std::string>& extra) {
-  std::vector<std::string> argv = {BinPath("mrslam_launch"), "--scenario", SourcePath("config/paper_two_robots.yaml"),
-                                   "--out", out, "--domain", std::to_string(domain), "--set",
+  std::vector<std::string> argv = {BinPath("mrslam_launch"),
+                                   "--scenario",
+                                   SourcePath("config/paper_two_robots.yaml"),
+                                   "--out",
+                                   out,
+                                   "--domain",
+                                   std::to_string(domain),
+                                   "--set",
                                    "filter.particles=100"};
   argv.insert(argv.end(), extra.begin(), extra.end());
   return argv;
 }
 
-bool HasMatplotlib() {
-  return std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") == 0;
-}
+bool HasMatplotlib() { return std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") == 0; }
 
 std::vector<std::string> Lines(const std::string& text) {
   std::vector<std::string> lines;
@@ -310,8 +314,7 @@ TEST(LauncherTest, SigintStopsEveryChildAndExits130) {
 TEST(LauncherTest, BadScenarioExitsOneWithOneLineNamingTheKey) {
   unsetenv("MRSLAM_DOMAIN");
   const std::string out = testing::MakeTempDir("mrslam-launch-bad");
-  ChildProcess launcher(LaunchArgs(out, kBadInputDomain, {"--set", "sensors.lidar.range_noise_sd_m=-1"}),
-                        out + ".log");
+  ChildProcess launcher(LaunchArgs(out, kBadInputDomain, {"--set", "sensors.lidar.range_noise_sd_m=-1"}), out + ".log");
   const auto code = launcher.WaitExit(seconds(30));
   ASSERT_TRUE(code.has_value());
   EXPECT_EQ(*code, 1);

@@ -69,6 +69,9 @@ std::string RunEvaluator::Missing() const {
   if (truth_.size() < last + 1) return fmt::format("truth: {} of {} steps", truth_.size(), last + 1);
   for (const auto& [id, est] : estimates_) {
     if (est.count(last) == 0) return fmt::format("{}: estimates of {} of {} steps", id, est.size(), last);
+    const auto o = odometry_.find(id);
+    const std::size_t n = o == odometry_.end() ? 0 : o->second.size();
+    if (n < last) return fmt::format("{}: odometry of {} of {} steps", id, n, last);
   }
   return {};
 }

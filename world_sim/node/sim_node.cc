@@ -97,6 +97,22 @@ struct SimNode::Impl {
     return true;
   }
 
+  // Waits until options.truth_readers readers have matched the truth topic.
+  bool WaitForTruthReaders(const std::atomic<bool>& stop) {
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(scenario.run.ack_timeout_s));
+    while (truth->MatchedReaders() < options.truth_readers) {
+      if (stop) return false;
+      if (Clock::now() > deadline) {
+        throw SimError("only " + std::to_string(truth->MatchedReaders()) + " of " +
+                       std::to_string(options.truth_readers) + " truth readers matched within " +
+                       std::to_string(scenario.run.ack_timeout_s) + " s");
+      }
+      std::this_thread::sleep_for(milliseconds(5));
+    }
+    return true;
+  }
+
   void Publish(const std::vector<common::SensorStep>& samples, const std::vector<msg::PeerDelivery>& deliveries) {
     for (std::size_t i = 0; i < samples.size(); ++i) {
       const auto& id = scenario.robots[i].id;
@@ -132,6 +148,7 @@ bool SimNode::Run(const std::atomic<bool>& stop) {
   // Step 0: every agent says it is ready (its readers exist).
   if (!s.WaitForAcks(0, stop, nullptr)) return false;
   spdlog::info("all agents ready");
+  if (!s.WaitForTruthReaders(stop)) return false;
 
   // The initial truth (step 0), so that the evaluator knows where everything started.
   if (!s.truth->Write(dds::ToMsg(s.world.Truth()))) throw SimError("DDS refused to publish ground truth");
@@ -170,7 +187,9 @@ bool SimNode::Run(const std::atomic<bool>& stop) {
   }
   // Let every matched reader (the evaluator) receive everything before the writers go away.
   const auto drain = std::chrono::duration_cast<milliseconds>(std::chrono::duration<double>(s.options.drain_timeout_s));
-  if (!s.truth->WaitForAcknowledgments(drain) || !s.clock->WaitForAcknowledgments(drain)) {
+  bool drained = s.truth->WaitForAcknowledgments(drain) && s.clock->WaitForAcknowledgments(drain);
+  for (auto& [id, w] : s.writers) drained = w.odometry->WaitForAcknowledgments(drain) && drained;
+  if (!drained) {
     spdlog::warn("some readers did not acknowledge every sample within {} s", s.options.drain_timeout_s);
   }
   spdlog::info("run complete: {} steps in {:.2f} s", steps,

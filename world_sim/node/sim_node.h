@@ -22,6 +22,8 @@ struct SimNodeOptions {
   std::vector<std::string> agents;
   // How long to wait at the end for readers (the evaluator) to acknowledge every sample.
   double drain_timeout_s = 10.0;
+  // Before step 1, wait until this many readers (the evaluator) have matched the truth topic.
+  int truth_readers = 0;
 };
 
 // The simulator's DDS node: steps the pure World and publishes, per robot, lidar, IMU and

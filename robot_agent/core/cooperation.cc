@@ -1,0 +1,388 @@
+#include "robot_agent/core/cooperation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <tuple>
+#include <utility>
+
+#include "common/gaussian.h"
+#include "robot_agent/core/map_fusion.h"
+
+// How an agent cooperates (the protocol; README "Cooperation"):
+//
+//  * Detection. Every robot detection in the own scan at step k >= rendezvous.enable_from_step
+//    is sent to the seen robot as a RelativeMeasurement (range, bearing, the own pose estimate
+//    and covariance at k) and kept, with that pose, in a short history.
+//  * Mutual detection. At the start of step k+1 the peer's measurements of step k arrive. An own
+//    detection of j at step s and j's detection of this robot at step s' pair when
+//    |s - s'| < window_steps, one to one, closest steps first. Both agents see the same
+//    candidates at the same call (lockstep: messages of step k are applied at k+1), and the
+//    pairing rule is symmetric in the two roles, so both find the same pairs.
+//  * Encounter and rendezvous. Mutual detections at most window_steps apart form an encounter.
+//    The first mutual detection of an encounter at least min_interval_steps after the previous
+//    rendezvous of the pair (or the pair's first ever) is a rendezvous event; its transform is
+//    refined by the encounter's mutual detections for 10 steps (the evaluator scores the
+//    transform held at the end of that window) and a map snapshot goes to the peer in
+//    AfterStep of the same step.
+//  * Transform. Each mutual detection gives T(G_i <- G_j) (rendezvous.h) with a covariance split
+//    into the robots' pose errors (dependent) and this detection's measurement noise
+//    (independent). Repeated estimates are fused by split covariance intersection: the pose
+//    errors of consecutive steps (and of later encounters) are strongly correlated (the same
+//    drifting filters), so counting them as independent each time would shrink the covariance
+//    without bound and make the transform overconfident; SCI treats their correlation as
+//    unknown (never overconfident) while the measurement noise, truly independent per
+//    detection, is still averaged down. Both agents fuse the same pairs in the same order from
+//    the same numbers (each uses the pose the other sent and its own kept pose), so their
+//    results are inverses of each other up to the linearization of the fusion.
+//  * Maps. A snapshot holds the confirmed landmarks of the sender's estimate (at most
+//    max_snapshot_landmarks) and the sender's transforms. The receiver moves the landmarks into
+//    its frame with the transform's covariance (map_fusion.h) and merges them into its filter.
+//    Transitive frames: from a snapshot of j holding T(G_j <- G_k), the receiver composes
+//    T(G_i <- G_k) = T(G_i <- G_j) T(G_j <- G_k) for every k it did not know; a chained
+//    transform is later refined (SCI) by newer chains or replaced in effect by meeting k.
+//  * Validation. Every message is checked before use: known other sender, addressed here, a step
+//    not after the current one and not older than the last applied of its kind from that sender,
+//    finite numbers, symmetric positive-definite covariances, a snapshot within the size bound
+//    whose sender's frame is known. A failing message is counted and changes nothing.
+//  * Cooperative localization (cooperation.cooperative_localization). Each mutual detection is
+//    used once: those of the first 10 steps of a rendezvous refine the transform; later ones
+//    (the rest of a long encounter, re-meetings before min_interval_steps) correct the own pose
+//    when the own and the peer's detections are of the filter's current step. The peer's
+//    position is moved into the own frame with the transform covariance added (that covariance
+//    already holds this robot's own pose error at the rendezvous) and its covariance doubled:
+//    the covariance-intersection bound with omega = 1/2 for the unknown correlation between the
+//    two robots' estimates that earlier exchanges create.
+namespace mrslam::robot_agent {
+namespace {
+
+constexpr int kEncounterRefineSteps = 10;   // DESIGN.md: an encounter is scored after 10 steps
+constexpr std::size_t kMaxHistory = 64;     // bound of each per-peer detection history
+constexpr double kCovarianceFloor = 1e-10;  // added to a sent pose covariance (1 particle: 0)
+
+bool Finite(const common::Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.heading); }
+
+bool ValidLandmark(const MapLandmark& l) {
+  return l.mean.allFinite() && std::isfinite(l.v_mps) && std::isfinite(l.w_radps) &&
+         common::IsSymmetricPositiveDefinite<3>(l.covariance);
+}
+
+bool ValidTransform(const FrameTransform& t) {
+  return Finite(t.t_self_peer) && common::IsSymmetricPositiveDefinite<3>(t.covariance);
+}
+
+template <typename Map>
+void TrimToSize(Map* m, std::size_t size) {
+  while (m->size() > size) m->erase(m->begin());
+}
+
+}  // namespace
+
+Cooperation::Cooperation(const common::ScenarioOptions& scenario, const std::string& robot_id)
+    : scenario_(scenario),
+      robot_id_(robot_id),
+      var_range_(scenario.sensors.lidar.range_noise_sd_m * scenario.sensors.lidar.range_noise_sd_m),
+      var_bearing_(scenario.sensors.lidar.bearing_noise_sd_rad * scenario.sensors.lidar.bearing_noise_sd_rad) {
+  // A noiseless lidar still needs a usable measurement covariance.
+  var_range_ = std::max(var_range_, 1e-12);
+  var_bearing_ = std::max(var_bearing_, 1e-12);
+}
+
+const std::vector<RendezvousEvent>& Cooperation::rendezvous() const { return rendezvous_; }
+
+std::vector<FrameTransform> Cooperation::known_transforms() const {
+  std::vector<FrameTransform> out;
+  for (const auto& [peer, state] : peers_) {
+    if (!state.transform) continue;
+    out.push_back({peer, state.transform_step, state.transform->t, state.transform->Covariance()});
+  }
+  return out;
+}
+
+std::vector<std::string> Cooperation::frames_known() const {
+  std::vector<std::string> out;
+  for (const auto& [peer, state] : peers_) {
+    if (state.transform) out.push_back(peer);
+  }
+  return out;
+}
+
+int Cooperation::rejected_messages() const { return rejected_; }
+
+bool Cooperation::HeaderValid(const PeerHeader& h) const {
+  if (h.recipient != robot_id_) return false;
+  if (h.sender == robot_id_ || scenario_.RobotIndex(h.sender) < 0) return false;
+  // Messages of step k are applied at the start of k+1, after AfterStep(k) of this agent.
+  if (any_step_ && h.step > last_step_ + 1) return false;
+  return std::isfinite(h.time_s);
+}
+
+bool Cooperation::MeasurementValid(const RelativeMeasurement& m) const {
+  if (!HeaderValid(m.header)) return false;
+  if (!std::isfinite(m.bearing_rad) || !Finite(m.sender_pose)) return false;
+  if (m.has_range && !(std::isfinite(m.range_m) && m.range_m > 0.0)) return false;
+  return common::IsSymmetricPositiveDefinite<3>(m.sender_covariance);
+}
+
+bool Cooperation::SnapshotValid(const MapSnapshot& m) const {
+  if (!HeaderValid(m.header)) return false;
+  if (static_cast<int>(m.landmarks.size()) > scenario_.cooperation.max_snapshot_landmarks) return false;
+  if (m.known_transforms.size() > scenario_.robots.size()) return false;
+  for (const auto& l : m.landmarks) {
+    if (!ValidLandmark(l)) return false;
+  }
+  for (const auto& t : m.known_transforms) {
+    if (scenario_.RobotIndex(t.peer) < 0 || t.peer == m.header.sender || !ValidTransform(t)) return false;
+  }
+  return true;
+}
+
+void Cooperation::Receive(const PeerInbox& inbox, SlamFilter* filter) {
+  // 1. Relative measurements: validate and keep them for pairing.
+  for (const auto& m : inbox.measurements) {
+    if (!MeasurementValid(m)) {
+      Reject();
+      continue;
+    }
+    PeerState& peer = peers_[m.header.sender];
+    // Stale: older than the last applied from that sender; a second one of the same step is a
+    // duplicate.
+    if (peer.last_measurement_step && m.header.step <= *peer.last_measurement_step) {
+      Reject();
+      continue;
+    }
+    peer.last_measurement_step = m.header.step;
+    if (static_cast<int>(m.header.step) >= scenario_.rendezvous.enable_from_step) {
+      peer.peer_measurements[m.header.step] = m;
+      TrimToSize(&peer.peer_measurements, kMaxHistory);
+    }
+  }
+  // 2. Mutual detections, per peer in id order.
+  for (auto& [id, peer] : peers_) {
+    if (!peer.peer_measurements.empty()) PairMutualDetections(id, filter);
+  }
+  // 3. Map snapshots (after the transforms of this call are known).
+  for (const auto& m : inbox.maps) {
+    if (!SnapshotValid(m)) {
+      Reject();
+      continue;
+    }
+    const auto it = peers_.find(m.header.sender);
+    if (it == peers_.end() || !it->second.transform ||
+        (it->second.last_snapshot_step && m.header.step < *it->second.last_snapshot_step)) {
+      Reject();  // the sender's frame is unknown, or stale
+      continue;
+    }
+    it->second.last_snapshot_step = m.header.step;
+    ApplySnapshot(m, filter);
+  }
+  // 4. Landmark-moved notices: validated and counted (the ELA filter will use them).
+  for (const auto& n : inbox.moved) {
+    PeerState* peer = HeaderValid(n.header) ? &peers_[n.header.sender] : nullptr;
+    if (peer == nullptr || !n.position_in_sender.allFinite() ||
+        (peer->last_notice_step && n.header.step < *peer->last_notice_step)) {
+      Reject();
+      continue;
+    }
+    peer->last_notice_step = n.header.step;
+    ++moved_notices_;
+  }
+}
+
+void Cooperation::PairMutualDetections(const std::string& peer_id, SlamFilter* filter) {
+  PeerState& peer = peers_[peer_id];
+  const auto window = static_cast<std::int64_t>(scenario_.rendezvous.window_steps);
+  // Candidate pairs (own step s, peer step t), |s - t| < window, ordered by a key that is the
+  // same from both sides: (|s - t|, s + t, the step of the robot with the smaller id).
+  const bool self_first = robot_id_ < peer_id;
+  std::vector<std::tuple<std::int64_t, std::int64_t, std::int64_t, std::uint32_t, std::uint32_t>> candidates;
+  for (const auto& [t, theirs] : peer.peer_measurements) {
+    for (const auto& [s, own] : peer.own_detections) {
+      const std::int64_t gap = std::abs(static_cast<std::int64_t>(s) - static_cast<std::int64_t>(t));
+      if (gap >= window) continue;
+      candidates.emplace_back(gap, static_cast<std::int64_t>(s) + t, self_first ? s : t, s, t);
+    }
+  }
+  std::sort(candidates.begin(), candidates.end());
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  std::vector<std::uint32_t> used_own, used_peer;
+  for (const auto& c : candidates) {
+    const std::uint32_t s = std::get<3>(c), t = std::get<4>(c);
+    if (std::count(used_own.begin(), used_own.end(), s) || std::count(used_peer.begin(), used_peer.end(), t)) {
+      continue;
+    }
+    used_own.push_back(s);
+    used_peer.push_back(t);
+    pairs.emplace_back(s, t);
+  }
+  // Apply in time order (the later step of the pair, then the own step ordered symmetrically).
+  std::sort(pairs.begin(), pairs.end(), [&](const auto& a, const auto& b) {
+    const auto key = [&](const auto& p) {
+      return std::make_tuple(std::max(p.first, p.second), self_first ? p.first : p.second);
+    };
+    return key(a) < key(b);
+  });
+  for (const auto& [s, t] : pairs) {
+    ApplyMutualDetection(peer_id, s, peer.own_detections.at(s), peer.peer_measurements.at(t), filter);
+    peer.own_detections.erase(s);
+    peer.peer_measurements.erase(t);
+  }
+  // Unpaired entries that no future detection (step >= last_step_ + 1) can pair with.
+  const std::int64_t oldest = static_cast<std::int64_t>(last_step_) + 1 - window;
+  for (auto it = peer.peer_measurements.begin(); it != peer.peer_measurements.end();) {
+    it = static_cast<std::int64_t>(it->first) < oldest ? peer.peer_measurements.erase(it) : std::next(it);
+  }
+}
+
+void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t own_step, const OwnDetection& own,
+                                       const RelativeMeasurement& theirs, SlamFilter* filter) {
+  PeerState& peer = peers_[peer_id];
+  const auto& rv = scenario_.rendezvous;
+  const std::uint32_t step = std::max(own_step, theirs.header.step);
+
+  // Encounter bookkeeping.
+  const bool continues = peer.in_encounter && step <= peer.encounter_last + static_cast<std::uint32_t>(rv.window_steps);
+  if (!continues) {
+    peer.in_encounter = true;
+    peer.encounter_first = step;
+    peer.encounter_pairs = 0;
+    peer.event_index = -1;
+    const bool due = !peer.last_rendezvous_step ||
+                     step >= *peer.last_rendezvous_step + static_cast<std::uint32_t>(rv.min_interval_steps);
+    if (due) {
+      peer.last_rendezvous_step = step;
+      peer.event_index = static_cast<int>(rendezvous_.size());
+      rendezvous_.push_back({peer_id, step, {}, Eigen::Matrix3d::Identity()});
+      peer.snapshot_due = scenario_.cooperation.merge_maps;
+    }
+  }
+  peer.encounter_last = step;
+  ++peer.encounter_pairs;
+  const bool refines = peer.event_index >= 0 && step <= peer.encounter_first + kEncounterRefineSteps;
+
+  const MutualDetection z{own.range_m, own.bearing_rad, theirs.range_m, theirs.bearing_rad, theirs.has_range};
+  const TransformEstimate estimate = TransformFromMutual(own.pose, own.covariance, theirs.sender_pose,
+                                                         theirs.sender_covariance, z, var_range_, var_bearing_);
+  if (!estimate.t.Vector().allFinite() || !estimate.Covariance().allFinite()) return;
+
+  const bool localize = scenario_.cooperation.cooperative_localization && !refines && peer.transform &&
+                        own_step == theirs.header.step && own_step == last_step_ && filter != nullptr;
+  if (localize) {
+    // The peer's position in the own frame: Compose(T, pose_j), covariance through the
+    // transform and the peer's pose, doubled (see the comment at the top).
+    const common::Pose2 in_own = common::Compose(peer.transform->t, theirs.sender_pose);
+    const Eigen::Matrix3d jt = common::ComposeJacobianLeft(peer.transform->t, theirs.sender_pose);
+    const Eigen::Matrix3d jp = common::ComposeJacobianRight(peer.transform->t, theirs.sender_pose);
+    const Eigen::Matrix3d c =
+        jt * peer.transform->Covariance() * jt.transpose() + jp * theirs.sender_covariance * jp.transpose();
+    if (filter->ObserveKnownRobot(in_own.Translation(), 2.0 * c.topLeftCorner<2, 2>(), own.range_m, own.bearing_rad)) {
+      ++cooperative_updates_;
+    }
+    return;
+  }
+
+  if (!peer.transform) {
+    peer.transform = estimate;
+    peer.met = true;
+  } else {
+    // An estimate far outside the one held (e.g. a detection paired with the wrong robot) is
+    // not fused.
+    const double gate = ChiSquare3Quantile(scenario_.cooperation.transform_gate_probability);
+    if (!peer.met || TransformDistanceSquared(*peer.transform, estimate) <= gate) {
+      peer.transform = FuseSplitCi(*peer.transform, estimate);
+    }
+    peer.met = true;
+  }
+  peer.transform_step = step;
+  if (refines) {
+    RendezvousEvent& e = rendezvous_[peer.event_index];
+    e.t_self_peer = peer.transform->t;
+    e.covariance = peer.transform->Covariance();
+  }
+}
+
+void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
+  PeerState& sender = peers_[m.header.sender];
+  const TransformEstimate& t_self_sender = *sender.transform;
+  // Transitive frames: T(G_self <- G_k) = T(G_self <- G_sender) * T(G_sender <- G_k).
+  for (const auto& ft : m.known_transforms) {
+    if (ft.peer == robot_id_) continue;
+    PeerState& k = peers_[ft.peer];
+    if (k.met) continue;  // met directly: its own detections are better than a chain
+    TransformEstimate sender_k;
+    sender_k.t = ft.t_self_peer;
+    sender_k.dependent = ft.covariance;
+    const TransformEstimate chained = ChainTransforms(t_self_sender, sender_k);
+    k.transform = k.transform ? FuseSplitCi(*k.transform, chained) : chained;
+    k.transform_step = m.header.step;
+  }
+  if (!scenario_.cooperation.merge_maps || filter == nullptr || m.landmarks.empty()) return;
+  std::vector<MapLandmark> moved;
+  moved.reserve(m.landmarks.size());
+  const Eigen::Matrix3d t_cov = t_self_sender.Covariance();
+  for (const auto& l : m.landmarks) moved.push_back(TransformLandmark(l, t_self_sender.t, t_cov));
+  filter->MergeLandmarks(moved, scenario_.cooperation.map_fusion, scenario_.cooperation.match_gate_probability);
+}
+
+MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const FilterEstimate& estimate) const {
+  MapSnapshot m;
+  m.header = {robot_id_, peer, estimate.step, estimate.time_s, 0};
+  const auto bound = static_cast<std::size_t>(scenario_.cooperation.max_snapshot_landmarks);
+  // Confirmed landmarks, the most recently seen first when the bound cuts.
+  std::vector<const MapLandmark*> confirmed;
+  for (const auto& l : estimate.landmarks) {
+    if (!l.tentative && ValidLandmark(l)) confirmed.push_back(&l);
+  }
+  std::stable_sort(confirmed.begin(), confirmed.end(),
+                   [](const MapLandmark* a, const MapLandmark* b) { return a->last_seen_step > b->last_seen_step; });
+  if (confirmed.size() > bound) confirmed.resize(bound);
+  for (const MapLandmark* l : confirmed) m.landmarks.push_back(*l);
+  for (const auto& t : known_transforms()) {
+    if (t.peer != peer) m.known_transforms.push_back(t);
+  }
+  return m;
+}
+
+PeerOutbox Cooperation::AfterStep(const common::LidarScan& scan, const FilterEstimate& estimate) {
+  PeerOutbox out;
+  const std::uint32_t k = estimate.step;
+  last_step_ = k;
+  any_step_ = true;
+  const auto& rv = scenario_.rendezvous;
+  Eigen::Matrix3d covariance = 0.5 * (estimate.covariance + estimate.covariance.transpose());
+  covariance.diagonal().array() += kCovarianceFloor;
+  if (static_cast<int>(k) >= rv.enable_from_step && Finite(estimate.pose) && covariance.allFinite()) {
+    for (const auto& d : scan.robots) {
+      if (d.seen_robot_id == robot_id_ || scenario_.RobotIndex(d.seen_robot_id) < 0) continue;
+      if (!std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad) || d.range_m <= 0.0) continue;
+      PeerState& peer = peers_[d.seen_robot_id];
+      if (!peer.own_detections.emplace(k, OwnDetection{d.range_m, d.bearing_rad, estimate.pose, covariance}).second) {
+        continue;  // a second detection of the same robot in one scan
+      }
+      TrimToSize(&peer.own_detections, kMaxHistory);
+      RelativeMeasurement m;
+      m.header = {robot_id_, d.seen_robot_id, k, estimate.time_s, 0};
+      m.has_range = true;
+      m.range_m = d.range_m;
+      m.bearing_rad = d.bearing_rad;
+      m.sender_pose = estimate.pose;
+      m.sender_covariance = covariance;
+      out.measurements.push_back(m);
+    }
+  }
+  // Own detections that no future peer measurement (step >= k + 1... received from k on) can
+  // pair with: the next Receive brings peer steps >= k, so keep s > k - window.
+  const std::int64_t oldest = static_cast<std::int64_t>(k) - rv.window_steps;
+  for (auto& [id, peer] : peers_) {
+    for (auto it = peer.own_detections.begin(); it != peer.own_detections.end();) {
+      it = static_cast<std::int64_t>(it->first) <= oldest ? peer.own_detections.erase(it) : std::next(it);
+    }
+    if (peer.snapshot_due) {
+      peer.snapshot_due = false;
+      out.maps.push_back(MakeSnapshot(id, estimate));
+    }
+  }
+  return out;
+}
+
+}  // namespace mrslam::robot_agent

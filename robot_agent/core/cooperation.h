@@ -1,0 +1,99 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/config/scenario_options.h"
+#include "robot_agent/core/peer_messages.h"
+#include "robot_agent/core/rendezvous.h"
+#include "robot_agent/core/slam_filter.h"
+
+namespace mrslam::robot_agent {
+
+// An agent's side of the cooperation among robots (paper A step 4, for N robots): the
+// rendezvous detector, the frame transforms to peers (estimated from mutual range-bearing
+// measurements, refined over an encounter, chained through peers' transforms), the map
+// snapshots it sends and the merging of the snapshots it receives into its filter, and the
+// validation of everything a peer sends. Pure: plain structs in and out; the node moves them.
+//
+// Per step k the node calls, in this order:
+//   1. Receive(inbox of step k-1, filter)   peer messages sent during step k-1, in a fixed order
+//   2. filter->Process(step k)
+//   3. AfterStep(scan k, estimate k)         -> the outbox of step k
+class Cooperation {
+ public:
+  Cooperation(const common::ScenarioOptions& scenario, const std::string& robot_id);
+
+  // Validates and applies peer messages. Rejected messages are counted and leave the map unchanged.
+  void Receive(const PeerInbox& inbox, SlamFilter* filter);
+
+  // Decides what to send after step k: relative measurements to every robot detected in the
+  // scan (from rendezvous.enable_from_step on), map snapshots to peers at a new rendezvous.
+  PeerOutbox AfterStep(const common::LidarScan& scan, const FilterEstimate& estimate);
+
+  // Every rendezvous so far (for the estimate stream and the log), and the frames known.
+  const std::vector<RendezvousEvent>& rendezvous() const;
+  std::vector<FrameTransform> known_transforms() const;
+  std::vector<std::string> frames_known() const;
+  int rejected_messages() const;
+  // Landmark-moved notices accepted so far (the ELA filter will use them).
+  int moved_notices() const { return moved_notices_; }
+  // Mutual detections used to correct the own pose (cooperative localization).
+  int cooperative_updates() const { return cooperative_updates_; }
+
+ private:
+  // The own detection of a peer at a step, with the own pose estimate of that step.
+  struct OwnDetection {
+    double range_m = 0.0;
+    double bearing_rad = 0.0;
+    common::Pose2 pose;
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  };
+  // Everything known about one peer.
+  struct PeerState {
+    std::optional<TransformEstimate> transform;  // T(G_self <- G_peer)
+    bool met = false;                  // from own mutual detections (else chained)
+    std::uint32_t transform_step = 0;  // when last estimated
+    // Detections not yet paired into a mutual detection, by step (bounded by the window).
+    std::map<std::uint32_t, OwnDetection> own_detections;
+    std::map<std::uint32_t, RelativeMeasurement> peer_measurements;
+    // The current encounter: a run of mutual detections at most window_steps apart.
+    bool in_encounter = false;
+    std::uint32_t encounter_first = 0, encounter_last = 0;
+    int encounter_pairs = 0;
+    int event_index = -1;  // into rendezvous_ while the encounter refines its event
+    std::optional<std::uint32_t> last_rendezvous_step;
+    bool snapshot_due = false;
+    // The last step applied per message kind (older ones are stale).
+    std::optional<std::uint32_t> last_measurement_step, last_snapshot_step, last_notice_step;
+  };
+
+  // Checks the parts every message shares: from a known other robot, to this one, not from a
+  // step after the current one.
+  bool HeaderValid(const PeerHeader& h) const;
+  bool MeasurementValid(const RelativeMeasurement& m) const;
+  bool SnapshotValid(const MapSnapshot& m) const;
+  // Pairs own detections and peer measurements into mutual detections and applies them.
+  void PairMutualDetections(const std::string& peer, SlamFilter* filter);
+  void ApplyMutualDetection(const std::string& peer, std::uint32_t own_step, const OwnDetection& own,
+                            const RelativeMeasurement& theirs, SlamFilter* filter);
+  void ApplySnapshot(const MapSnapshot& m, SlamFilter* filter);
+  MapSnapshot MakeSnapshot(const std::string& peer, const FilterEstimate& estimate) const;
+  void Reject() { ++rejected_; }
+
+  common::ScenarioOptions scenario_;
+  std::string robot_id_;
+  double var_range_ = 0.0, var_bearing_ = 0.0;
+  std::map<std::string, PeerState> peers_;
+  std::vector<RendezvousEvent> rendezvous_;
+  std::uint32_t last_step_ = 0;  // of the last AfterStep
+  bool any_step_ = false;
+  int rejected_ = 0;
+  int moved_notices_ = 0;
+  int cooperative_updates_ = 0;
+};
+
+}  // namespace mrslam::robot_agent

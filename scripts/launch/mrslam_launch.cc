@@ -1,0 +1,440 @@
+// mrslam_launch: runs a scenario end to end as separate processes (evaluator, world_sim, one
+// robot_agent per robot) on a free DDS domain, supervises them, shows progress, and at the end
+// prints a summary table and writes plots. With --seeds A..B it runs each seed in turn and
+// aggregates (median, 90th percentile). See README: "Running a scenario".
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/app.h"
+#include "common/config/scenario_options.h"
+#include "common/dds/participant.h"
+#include "scripts/launch/domain_picker.h"
+#include "scripts/launch/process_supervisor.h"
+#include "scripts/launch/progress_monitor.h"
+#include "scripts/launch/run_report.h"
+
+namespace mrslam::launch {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+constexpr char kName[] = "mrslam_launch";
+constexpr auto kStopGrace = std::chrono::seconds(5);
+// Once world_sim has finished, the agents and the evaluator must finish within this time.
+constexpr auto kDrainTimeout = std::chrono::seconds(120);
+constexpr auto kPlotTimeout = std::chrono::seconds(300);
+constexpr auto kEvaluatorJoinTimeout = std::chrono::seconds(20);
+constexpr int kLogTailLines = 15;
+constexpr int kPlotScriptMissingMatplotlib = 3;  // plot_run.py's exit code when it cannot plot
+
+// Outcomes of a run (process exit codes of the launcher).
+constexpr int kOk = 0;
+constexpr int kFailed = 1;
+constexpr int kStopped = 130;
+
+struct LaunchFlags {
+  common::CommonFlags common;
+  bool log_level_given = false;
+  std::string out_dir;
+  std::string seeds;  // "A..B"
+  bool no_plots = false;
+  double timeout_s = 0.0;
+};
+
+double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+std::string FormatSeconds(double s) {
+  char buffer[32];
+  if (s < 60) {
+    std::snprintf(buffer, sizeof(buffer), "%.1f s", s);
+  } else {
+    std::snprintf(buffer, sizeof(buffer), "%d min %02d s", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+  }
+  return buffer;
+}
+
+// "A..B" (or a single seed "A") to the list A, A+1, ..., B.
+std::vector<long long> ParseSeeds(const std::string& text) {
+  static const std::regex pattern(R"(^\s*(\d{1,15})\s*(?:\.\.\s*(\d{1,15})\s*)?$)");
+  std::smatch m;
+  if (!std::regex_match(text, m, pattern)) {
+    throw std::runtime_error("--seeds '" + text + "' is not of the form A..B with 0 <= A <= B");
+  }
+  const long long first = std::stoll(m[1].str());
+  const long long last = m[2].matched ? std::stoll(m[2].str()) : first;
+  if (last < first) throw std::runtime_error("--seeds '" + text + "': the last seed is below the first");
+  if (last - first >= 10000) throw std::runtime_error("--seeds '" + text + "': more than 10000 seeds");
+  std::vector<long long> seeds;
+  for (long long s = first; s <= last; ++s) seeds.push_back(s);
+  return seeds;
+}
+
+// Shows the progress line on stderr: rewritten in place on a terminal (at most 4 times a
+// second), else a new line at most every 2 s and only when something changed.
+class ProgressPrinter {
+ public:
+  explicit ProgressPrinter(std::string prefix) : prefix_(std::move(prefix)), tty_(isatty(STDERR_FILENO) == 1) {}
+  ~ProgressPrinter() { Finish(); }
+  ProgressPrinter(const ProgressPrinter&) = delete;
+  ProgressPrinter& operator=(const ProgressPrinter&) = delete;
+
+  void Show(const Progress& p, int total_steps, double elapsed_s, std::optional<double> left_s) {
+    const auto now = Clock::now();
+    const auto period = tty_ ? std::chrono::milliseconds(250) : std::chrono::milliseconds(2000);
+    if (now - last_print_ < period) return;
+    if (!tty_ && p.steps_done == last_steps_ && p.rendezvous == last_rendezvous_) return;
+    std::string line = prefix_ + "step " + std::to_string(p.steps_done) + "/" + std::to_string(total_steps) +
+                       ", rendezvous so far " + std::to_string(p.rendezvous) + ", elapsed " + FormatSeconds(elapsed_s) +
+                       ", time left " + (left_s ? "~" + FormatSeconds(*left_s) : std::string("?"));
+    if (tty_) {
+      std::cerr << "\r\033[K" << line << std::flush;
+      line_open_ = true;
+    } else {
+      std::cerr << line << "\n" << std::flush;
+    }
+    last_print_ = now;
+    last_steps_ = p.steps_done;
+    last_rendezvous_ = p.rendezvous;
+  }
+  // Ends an in-place line so that what follows starts on its own line.
+  void Finish() {
+    if (line_open_) std::cerr << "\n" << std::flush;
+    line_open_ = false;
+  }
+
+ private:
+  std::string prefix_;
+  bool tty_;
+  bool line_open_ = false;
+  Clock::time_point last_print_{};
+  int last_steps_ = -1;
+  int last_rendezvous_ = -1;
+};
+
+// The flags every child gets: --scenario --domain --seed --set... [--shm] [--log-level].
+std::vector<std::string> CommonChildArgs(const LaunchFlags& flags, const std::string& scenario_path, int domain,
+                                         long long seed) {
+  std::vector<std::string> args = {"--scenario",           scenario_path, "--domain",
+                                   std::to_string(domain), "--seed",      std::to_string(seed)};
+  for (const auto& o : flags.common.overrides) {
+    args.push_back("--set");
+    args.push_back(o);
+  }
+  if (flags.common.shared_memory) args.push_back("--shm");
+  if (flags.log_level_given) {
+    args.push_back("--log-level");
+    args.push_back(flags.common.log_level);
+  }
+  return args;
+}
+
+void ReportFailure(const ChildExit& failure, const std::string& what_else) {
+  std::cerr << kName << ": error: " << failure.name << " (pid " << failure.pid << ") " << failure.Describe()
+            << "; log: " << failure.log_path << what_else << "\n";
+  const std::string tail = TailOfFile(failure.log_path, kLogTailLines);
+  if (!tail.empty()) {
+    std::cerr << "---- last lines of " << failure.log_path << " ----\n" << tail << "----\n";
+  }
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+// Runs plot_run.py on a run's folder. Never fails the run: problems are warnings. Returns the
+// plots written.
+std::vector<std::string> RunPlots(const std::string& dir, const std::atomic<bool>& stop) {
+  const std::string script = ExecutableDir() + "/plot_run.py";
+  const std::string python = "/usr/bin/python3";
+  if (access(script.c_str(), R_OK) != 0) {
+    std::cerr << kName << ": warning: " << script << " not found: no plots\n";
+    return {};
+  }
+  if (access(python.c_str(), X_OK) != 0) {
+    std::cerr << kName << ": warning: " << python << " not found (apt-get install python3-matplotlib): no plots\n";
+    return {};
+  }
+  const std::string log = dir + "/logs/plot_run.log";
+  ProcessSupervisor plot;
+  plot.Start("plot_run", {python, script, dir}, log);
+  const auto deadline = Clock::now() + kPlotTimeout;
+  std::optional<ChildExit> result;
+  while (!result) {
+    for (auto& e : plot.Reap()) result = e;
+    if (result) break;
+    if (stop || Clock::now() > deadline) {
+      plot.StopAll(kStopGrace);
+      std::cerr << kName << ": warning: plotting " << (stop ? "interrupted" : "timed out") << "\n";
+      return {};
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (result->signal == 0 && result->exit_code == kPlotScriptMissingMatplotlib) {
+    std::cerr << kName << ": warning: " << python
+              << " cannot import matplotlib (apt-get install python3-matplotlib): no plots\n";
+    return {};
+  }
+  if (!result->ok()) {
+    std::cerr << kName << ": warning: plot_run.py " << result->Describe() << "; log: " << log << "\n"
+              << TailOfFile(log, kLogTailLines);
+    return {};
+  }
+  std::vector<std::string> written;
+  for (const char* name : {"trajectories.png", "errors.png", "overview.png"}) {
+    const std::string path = dir + "/plots/" + name;
+    if (fs::exists(path)) written.push_back(path);
+  }
+  return written;
+}
+
+// Runs one seed into dir. Returns kOk (and the summary), kFailed or kStopped.
+int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, const std::string& scenario_path,
+            long long seed, int domain, const std::string& dir, const std::string& progress_prefix,
+            const std::atomic<bool>& stop, json* summary_out) {
+  fs::create_directories(dir + "/logs");
+  fs::remove(dir + "/summary.json");  // a stale summary must not pass for this run's
+  const std::string bin = ExecutableDir();
+  const auto common_args = CommonChildArgs(flags, scenario_path, domain, seed);
+  auto command = [&](const std::string& exe, std::vector<std::string> extra) {
+    std::vector<std::string> argv = {bin + "/" + exe};
+    argv.insert(argv.end(), common_args.begin(), common_args.end());
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return argv;
+  };
+
+  const auto start = Clock::now();
+  std::vector<std::string> robot_ids;
+  for (const auto& r : scenario.robots) robot_ids.push_back(r.id);
+  // The monitor joins first, to see the evaluator join.
+  std::unique_ptr<ProgressMonitor> monitor;
+  try {
+    monitor = std::make_unique<ProgressMonitor>(domain, flags.common.shared_memory, robot_ids);
+  } catch (const std::exception& e) {
+    std::cerr << kName << ": warning: no progress display (" << e.what() << ")\n";
+  }
+  ProcessSupervisor children;
+  // The evaluator first, and the others only once it is in the domain: it is not part of the
+  // lockstep barrier, so a short run could otherwise end (and its writers go away) before it joins.
+  children.Start("evaluator", command("evaluator", {"--out", dir}), dir + "/logs/evaluator.log");
+  if (monitor) {
+    const auto deadline = Clock::now() + kEvaluatorJoinTimeout;
+    while (!monitor->HasSeenParticipant("evaluator") && Clock::now() < deadline && !stop) {
+      const auto ended = children.Reap();
+      if (!ended.empty()) {  // the evaluator ended before the run began
+        ReportFailure(ended.front(), "");
+        return kFailed;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    if (!monitor->HasSeenParticipant("evaluator") && !stop) {
+      std::cerr << kName << ": warning: the evaluator has not joined DDS domain " << domain << " after "
+                << FormatSeconds(Seconds(kEvaluatorJoinTimeout)) << "; starting the others anyway\n";
+    }
+  }
+  // Then the agents, then the simulator (it waits for every agent's "ready").
+  for (const auto& robot : scenario.robots) {
+    const std::string name = "robot_agent_" + robot.id;
+    // The evaluator (and the progress monitor) must read every estimate: wait for them.
+    children.Start(name,
+                   command("robot_agent", {"--robot", robot.id, "--wait-readers", monitor ? "2" : "1"}),
+                   dir + "/logs/" + name + ".log");
+  }
+  children.Start("world_sim", command("world_sim", {"--wait-readers", "1"}), dir + "/logs/world_sim.log");
+
+  ProgressPrinter printer(progress_prefix);
+  std::optional<Clock::time_point> first_step_at;
+  std::optional<Clock::time_point> world_done_at;
+  const int total_steps = scenario.run.steps;
+  while (true) {
+    if (stop) {
+      printer.Finish();
+      std::cerr << kName << ": interrupted: stopping " << JoinNames(children.RunningNames()) << "\n";
+      monitor.reset();
+      children.StopAll(kStopGrace);
+      return kStopped;
+    }
+    std::optional<ChildExit> failure;
+    for (auto& e : children.Reap()) {
+      if (!e.ok() && !failure) failure = e;
+      if (e.ok() && e.name == "world_sim") world_done_at = Clock::now();
+    }
+    if (failure) {
+      printer.Finish();
+      monitor.reset();
+      const auto others = children.RunningNames();
+      children.StopAll(kStopGrace);
+      ReportFailure(*failure, others.empty() ? "" : "; stopped " + JoinNames(others));
+      return kFailed;
+    }
+    if (children.running() == 0) break;
+    const auto now = Clock::now();
+    std::string timeout;
+    if (flags.timeout_s > 0 && Seconds(now - start) > flags.timeout_s) {
+      timeout = "the run did not finish within --timeout-s " + FormatSeconds(flags.timeout_s);
+    } else if (world_done_at && now - *world_done_at > kDrainTimeout) {
+      timeout = "world_sim finished but the others did not within " + FormatSeconds(Seconds(kDrainTimeout));
+    }
+    if (!timeout.empty()) {
+      printer.Finish();
+      monitor.reset();
+      const auto others = children.RunningNames();
+      children.StopAll(kStopGrace);
+      std::cerr << kName << ": error: " << timeout << " (still running: " << JoinNames(others) << "); logs in " << dir
+                << "/logs\n";
+      return kFailed;
+    }
+    if (monitor) {
+      const Progress p = monitor->Poll();
+      if (p.steps_done > 0 && !first_step_at) first_step_at = now;
+      std::optional<double> left;
+      if (first_step_at && p.steps_done > 1) {
+        const double per_step = Seconds(now - *first_step_at) / (p.steps_done - 1);
+        left = per_step * std::max(0, total_steps - p.steps_done);
+      }
+      printer.Show(p, total_steps, Seconds(now - start), left);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  printer.Finish();
+  monitor.reset();
+  const double wall_s = Seconds(Clock::now() - start);
+
+  const std::string summary_path = dir + "/summary.json";
+  std::ifstream in(summary_path);
+  if (!in) {
+    std::cerr << kName << ": error: every process finished but the evaluator wrote no " << summary_path
+              << "; log: " << dir << "/logs/evaluator.log\n";
+    return kFailed;
+  }
+  json summary;
+  try {
+    in >> summary;
+  } catch (const std::exception& e) {
+    std::cerr << kName << ": error: " << summary_path << " is not valid JSON (" << e.what() << ")\n";
+    return kFailed;
+  }
+  in.close();
+  if (summary.contains("wall_seconds")) summary["evaluator_wall_seconds"] = summary["wall_seconds"];
+  summary["wall_seconds"] = wall_s;
+  summary["dds_domain"] = domain;
+  {
+    const std::string tmp = summary_path + ".tmp";
+    std::ofstream out(tmp);
+    out << summary.dump(2) << "\n";
+    out.close();
+    if (!out) throw std::runtime_error("cannot write " + summary_path);
+    fs::rename(tmp, summary_path);
+  }
+  *summary_out = summary;
+  return kOk;
+}
+
+int Main(const LaunchFlags& flags) {
+  const auto scenario = common::LoadScenarioFromFlags(flags.common);  // validates; throws one line
+  const std::string scenario_path = fs::absolute(flags.common.scenario).string();
+  if (!flags.seeds.empty() && flags.common.seed >= 0) throw std::runtime_error("give --seed or --seeds, not both");
+  const std::vector<long long> seeds =
+      flags.seeds.empty() ? std::vector<long long>{static_cast<long long>(scenario.seed)} : ParseSeeds(flags.seeds);
+  const bool multi = !flags.seeds.empty();
+
+  // The domain: --domain or MRSLAM_DOMAIN if given (as every process resolves it), else a free one.
+  const char* env_domain = std::getenv("MRSLAM_DOMAIN");
+  const bool domain_given = flags.common.domain >= 0 || (env_domain != nullptr && *env_domain != '\0');
+  const int given_domain = domain_given ? dds::ResolveDomain(scenario.run.domain, flags.common.domain) : -1;
+
+  const std::string out_dir = fs::absolute(flags.out_dir).lexically_normal().string();
+  fs::create_directories(out_dir);
+  const auto& stop = common::InstallStopHandler();
+
+  std::vector<json> summaries;
+  for (const long long seed : seeds) {
+    const int domain = domain_given ? given_domain : PickFreeDomain(getpid());
+    if (domain < 0) {
+      throw std::runtime_error("no free DDS domain in " + std::to_string(kFirstAutoDomain) + ".." +
+                               std::to_string(kLastAutoDomain) + " (give one with --domain)");
+    }
+    const std::string dir = multi ? out_dir + "/seed-" + std::to_string(seed) : out_dir;
+    std::cerr << kName << ": scenario '" << scenario.name << "', seed " << seed << ", " << scenario.run.steps
+              << " steps, " << scenario.robots.size() << " robots, DDS domain " << domain << "; logs in " << dir
+              << "/logs\n";
+    json summary;
+    const std::string prefix = multi ? "[seed " + std::to_string(seed) + "] " : "";
+    const int code = RunSeed(flags, scenario, scenario_path, seed, domain, dir, prefix, stop, &summary);
+    if (code != kOk) return code;
+
+    std::vector<std::string> plots;
+    if (!flags.no_plots) plots = RunPlots(dir, stop);
+    if (stop) return kStopped;
+    const double wall_s = summary.value("wall_seconds", 0.0);
+    if (multi) {
+      std::cout << "seed " << seed << ": finished in " << FormatSeconds(wall_s) << " (" << dir << ")\n" << std::flush;
+    } else {
+      std::cout << "\nScenario '" << scenario.name << "', seed " << seed << ", "
+                << summary.value("steps", json()).dump() << " steps, finished in " << FormatSeconds(wall_s) << "\n\n"
+                << SummaryTable(summary) << "\n"
+                << "Outputs: " << dir << "/summary.json, " << dir << "/metrics.csv, " << dir << "/trajectories/, "
+                << dir << "/logs/\n";
+      if (!plots.empty()) {
+        std::cout << "Plots:\n";
+        for (const auto& p : plots) std::cout << "  " << p << "\n";
+      }
+      std::cout << std::flush;
+    }
+    summaries.push_back(std::move(summary));
+  }
+
+  if (multi) {
+    const json aggregate = Aggregate(summaries, seeds);
+    const std::string path = out_dir + "/aggregate.json";
+    std::ofstream out(path);
+    out << aggregate.dump(2) << "\n";
+    out.close();
+    if (!out) throw std::runtime_error("cannot write " + path);
+    std::cout << "\nScenario '" << scenario.name << "', seeds " << seeds.front() << ".." << seeds.back() << " ("
+              << seeds.size() << " runs): median and 90th percentile over seeds\n\n"
+              << AggregateTable(aggregate) << "\nAggregate: " << path << "\n"
+              << std::flush;
+  }
+  return kOk;
+}
+
+}  // namespace
+}  // namespace mrslam::launch
+
+int main(int argc, char** argv) {
+  using namespace mrslam;
+  CLI::App app{
+      "mrslam launcher: runs a scenario end to end (evaluator, world_sim, one robot_agent per robot) as separate "
+      "processes on a free DDS domain, then prints a summary and writes plots"};
+  launch::LaunchFlags flags;
+  common::AddCommonFlags(app, &flags.common);
+  app.add_option("--out", flags.out_dir, "Output folder (summary.json, metrics.csv, trajectories/, plots/, logs/)")
+      ->required();
+  app.add_option("--seeds", flags.seeds, "Run seeds A..B in turn into OUT/seed-<S>/ and write OUT/aggregate.json");
+  app.add_flag("--no-plots", flags.no_plots, "Do not run plot_run.py");
+  app.add_option("--timeout-s", flags.timeout_s, "Stop a run that takes longer than this (0: no limit)")
+      ->check(CLI::NonNegativeNumber);
+  return common::RunMain(launch::kName, app, argc, argv, [&] {
+    flags.log_level_given = app.get_option("--log-level")->count() > 0;
+    return launch::Main(flags);
+  });
+}

@@ -1,0 +1,9 @@
+# Cooperation among robots: rendezvous maths (transform from mutual detections, chaining, split
+# covariance intersection), map fusion rules and matching, the agents' protocol in process
+# (rendezvous, snapshots, transitive frames) and the rejection of hostile peer input.
+mrslam_add_test(map_fusion_test
+  SOURCES map_fusion_test.cc
+  LIBS mrslam_agent_core)
+mrslam_add_test(cooperation_test
+  SOURCES cooperation_test.cc
+  LIBS mrslam_agent_core)

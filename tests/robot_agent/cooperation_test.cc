@@ -1,0 +1,830 @@
+#include "robot_agent/core/cooperation.h"
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "common/gaussian.h"
+#include "common/rng.h"
+#include "robot_agent/core/fastslam.h"
+#include "robot_agent/core/map_fusion.h"
+#include "robot_agent/core/rendezvous.h"
+#include "tests/robot_agent/tiny_world.h"
+
+namespace mrslam::robot_agent {
+namespace {
+
+using common::Pose2;
+
+// ---------------------------------------------------------------------------------------------
+// Helpers.
+
+Eigen::Vector3d PoseError(const Pose2& estimate, const Pose2& truth) {
+  return {estimate.x - truth.x, estimate.y - truth.y, common::WrapAngle(estimate.heading - truth.heading)};
+}
+
+double Nees(const Pose2& estimate, const Pose2& truth, const Eigen::Matrix3d& cov) {
+  const Eigen::Vector3d e = PoseError(estimate, truth);
+  return e.dot(cov.ldlt().solve(e));
+}
+
+Pose2 SamplePose(common::Rng* rng, const Pose2& mean, const Eigen::Matrix3d& cov) {
+  const Eigen::LLT<Eigen::Matrix3d> llt(cov);
+  const Eigen::Vector3d n(rng->Normal(), rng->Normal(), rng->Normal());
+  return Pose2::FromVector(mean.Vector() + llt.matrixL() * n);
+}
+
+MATCHER_P2(IsNearlyPose, expected, tol, "") {
+  const Eigen::Vector3d e = PoseError(arg, expected);
+  *result_listener << "error (" << e.transpose() << ")";
+  return e.head<2>().norm() <= tol && std::abs(e.z()) <= tol;
+}
+
+// The true mutual detection between two robots given in one frame.
+MutualDetection TrueMutual(const Pose2& robot_i, const Pose2& robot_j) {
+  const common::RangeBearing ij = common::MeasureRangeBearing(robot_i, robot_j.Translation());
+  const common::RangeBearing ji = common::MeasureRangeBearing(robot_j, robot_i.Translation());
+  return {ij.range_m, ij.bearing_rad, ji.range_m, ji.bearing_rad, true};
+}
+
+struct RandomCase {
+  Pose2 frame_i, frame_j;  // G_i, G_j in W
+  Pose2 robot_i, robot_j;  // robots in W
+  Pose2 Truth() const { return common::Compose(common::Inverse(frame_i), frame_j); }
+  Pose2 PoseI() const { return common::Compose(common::Inverse(frame_i), robot_i); }
+  Pose2 PoseJ() const { return common::Compose(common::Inverse(frame_j), robot_j); }
+};
+
+RandomCase MakeCase(common::Rng* rng) {
+  RandomCase c;
+  c.frame_i = {rng->Uniform(-10, 10), rng->Uniform(-10, 10), rng->Uniform(-3.1, 3.1)};
+  c.frame_j = {rng->Uniform(-10, 10), rng->Uniform(-10, 10), rng->Uniform(-3.1, 3.1)};
+  c.robot_i = {rng->Uniform(-10, 10), rng->Uniform(-10, 10), rng->Uniform(-3.1, 3.1)};
+  const double r = rng->Uniform(0.5, 6.0), a = rng->Uniform(-3.1, 3.1);
+  c.robot_j = {c.robot_i.x + r * std::cos(a), c.robot_i.y + r * std::sin(a), rng->Uniform(-3.1, 3.1)};
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rendezvous maths.
+
+TEST(Rendezvous, RelativePoseOfBothSidesAreInverses) {
+  common::Rng rng(1, "relative");
+  for (int trial = 0; trial < 1000; ++trial) {
+    const RandomCase c = MakeCase(&rng);
+    const MutualDetection z = TrueMutual(c.robot_i, c.robot_j);
+    const MutualDetection swapped{z.range_ji_m, z.bearing_ji_rad, z.range_ij_m, z.bearing_ij_rad, true};
+    const Pose2 ij = RelativePoseFromMutual(z, nullptr), ji = RelativePoseFromMutual(swapped, nullptr);
+    EXPECT_THAT(common::Compose(ij, ji), IsNearlyPose(Pose2{}, 1e-9));
+    EXPECT_THAT(ij, IsNearlyPose(common::Between(c.robot_i, c.robot_j), 1e-9));
+  }
+}
+
+TEST(Rendezvous, TransformIsExactWithoutNoise) {
+  common::Rng rng(2, "exact");
+  const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() * 1e-4;
+  for (int trial = 0; trial < 1000; ++trial) {
+    const RandomCase c = MakeCase(&rng);
+    const TransformEstimate t =
+        TransformFromMutual(c.PoseI(), p, c.PoseJ(), p, TrueMutual(c.robot_i, c.robot_j), 1e-4, 1e-4);
+    EXPECT_THAT(t.t, IsNearlyPose(c.Truth(), 1e-9));
+    EXPECT_TRUE(common::IsSymmetricPositiveDefinite<3>(t.Covariance()));
+  }
+}
+
+TEST(Rendezvous, JacobiansMatchNumericDifferences) {
+  common::Rng rng(3, "jacobians");
+  for (int trial = 0; trial < 100; ++trial) {
+    const RandomCase c = MakeCase(&rng);
+    MutualDetection z = TrueMutual(c.robot_i, c.robot_j);
+    Eigen::Matrix<double, 3, 4> j;
+    const Pose2 base = RelativePoseFromMutual(z, &j);
+    const double h = 1e-6;
+    double* fields[4] = {&z.range_ij_m, &z.bearing_ij_rad, &z.range_ji_m, &z.bearing_ji_rad};
+    for (int k = 0; k < 4; ++k) {
+      MutualDetection zp = z;
+      double* fp[4] = {&zp.range_ij_m, &zp.bearing_ij_rad, &zp.range_ji_m, &zp.bearing_ji_rad};
+      *fp[k] = *fields[k] + h;
+      const Eigen::Vector3d d = PoseError(RelativePoseFromMutual(zp, nullptr), base) / h;
+      EXPECT_LT((d - j.col(k)).norm(), 1e-4) << "column " << k;
+    }
+    const Pose2 a = c.PoseI();
+    const Eigen::Matrix3d ji = InverseJacobian(a);
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d v = a.Vector();
+      v(k) += h;
+      const Eigen::Vector3d d = PoseError(common::Inverse(Pose2{v.x(), v.y(), v.z()}), common::Inverse(a)) / h;
+      EXPECT_LT((d - ji.col(k)).norm(), 1e-4);
+    }
+  }
+}
+
+// Normalized estimation error squared over many seeded trials with noisy poses and readings:
+// the mean must be 3 (chi-square, 3 dof) within its sampling spread.
+TEST(Rendezvous, TransformIsConsistentWithNoise) {
+  common::Rng rng(4, "nees");
+  constexpr int kTrials = 4000;
+  const double sd_r = 0.03, sd_b = 0.02;
+  double nees_sum = 0.0;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    const RandomCase c = MakeCase(&rng);
+    Eigen::Matrix3d pi = Eigen::Matrix3d::Zero(), pj = Eigen::Matrix3d::Zero();
+    pi.diagonal() << std::pow(rng.Uniform(0.01, 0.05), 2), std::pow(rng.Uniform(0.01, 0.05), 2),
+        std::pow(rng.Uniform(0.005, 0.02), 2);
+    pj.diagonal() << std::pow(rng.Uniform(0.01, 0.05), 2), std::pow(rng.Uniform(0.01, 0.05), 2),
+        std::pow(rng.Uniform(0.005, 0.02), 2);
+    const Pose2 est_i = SamplePose(&rng, c.PoseI(), pi), est_j = SamplePose(&rng, c.PoseJ(), pj);
+    MutualDetection z = TrueMutual(c.robot_i, c.robot_j);
+    z.range_ij_m += rng.Normal(0, sd_r);
+    z.range_ji_m += rng.Normal(0, sd_r);
+    z.bearing_ij_rad += rng.Normal(0, sd_b);
+    z.bearing_ji_rad += rng.Normal(0, sd_b);
+    const TransformEstimate t = TransformFromMutual(est_i, pi, est_j, pj, z, sd_r * sd_r, sd_b * sd_b);
+    nees_sum += Nees(t.t, c.Truth(), t.Covariance());
+  }
+  const double mean = nees_sum / kTrials;  // sd of the mean: sqrt(6 / 4000) = 0.039
+  EXPECT_GT(mean, 3.0 - 0.2);
+  EXPECT_LT(mean, 3.0 + 0.2);
+}
+
+TEST(Rendezvous, BothSidesComputeInverseTransforms) {
+  common::Rng rng(5, "sides");
+  for (int trial = 0; trial < 500; ++trial) {
+    const RandomCase c = MakeCase(&rng);
+    Eigen::Matrix3d pi = Eigen::Matrix3d::Identity() * 4e-4, pj = Eigen::Matrix3d::Identity() * 9e-4;
+    pi(2, 2) = 1e-4;
+    const Pose2 est_i = SamplePose(&rng, c.PoseI(), pi), est_j = SamplePose(&rng, c.PoseJ(), pj);
+    MutualDetection z = TrueMutual(c.robot_i, c.robot_j);
+    z.range_ij_m += rng.Normal(0, 0.03);
+    z.bearing_ji_rad += rng.Normal(0, 0.03);
+    const MutualDetection swapped{z.range_ji_m, z.bearing_ji_rad, z.range_ij_m, z.bearing_ij_rad, true};
+    const TransformEstimate ij = TransformFromMutual(est_i, pi, est_j, pj, z, 1e-3, 1e-3);
+    const TransformEstimate ji = TransformFromMutual(est_j, pj, est_i, pi, swapped, 1e-3, 1e-3);
+    EXPECT_THAT(common::Compose(ij.t, ji.t), IsNearlyPose(Pose2{}, 1e-9));
+    const TransformEstimate inv = InvertTransform(ij);
+    EXPECT_LT((inv.Covariance() - ji.Covariance()).norm(), 1e-9 * (1.0 + ji.Covariance().norm()));
+  }
+}
+
+TEST(Rendezvous, ChainedTransformIsExactAndConsistent) {
+  common::Rng rng(6, "chain");
+  constexpr int kTrials = 3000;
+  double nees_sum = 0.0;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    const RandomCase c = MakeCase(&rng);
+    const Pose2 frame_k{rng.Uniform(-10, 10), rng.Uniform(-10, 10), rng.Uniform(-3, 3)};
+    const Pose2 t_ij = c.Truth(), t_jk = common::Compose(common::Inverse(c.frame_j), frame_k);
+    TransformEstimate a, b;
+    a.t = t_ij;
+    a.dependent = Eigen::Matrix3d::Identity() * 1e-3;
+    b.t = t_jk;
+    b.independent = Eigen::Matrix3d::Identity() * 2e-3;
+    const TransformEstimate exact = ChainTransforms(a, b);
+    EXPECT_THAT(exact.t, IsNearlyPose(common::Compose(common::Inverse(c.frame_i), frame_k), 1e-9));
+    TransformEstimate na = a, nb = b;
+    na.t = SamplePose(&rng, t_ij, a.Covariance());
+    nb.t = SamplePose(&rng, t_jk, b.Covariance());
+    const TransformEstimate noisy = ChainTransforms(na, nb);
+    nees_sum += Nees(noisy.t, exact.t, noisy.Covariance());
+  }
+  EXPECT_GT(nees_sum / kTrials, 2.8);
+  EXPECT_LT(nees_sum / kTrials, 3.2);
+}
+
+// Split CI of estimates that share a pose error (the same drifting filters) and have
+// independent measurement noise: consistent, and tighter than either input.
+TEST(Rendezvous, SplitCiIsConsistentForSharedPoseErrors) {
+  common::Rng rng(8, "sci");
+  constexpr int kTrials = 3000, kRepeats = 8;
+  double nees_sum = 0.0, naive_sum = 0.0;
+  const Eigen::Matrix3d dep = Eigen::Vector3d(0.01, 0.01, 0.002).asDiagonal();
+  const Eigen::Matrix3d ind = Eigen::Vector3d(0.004, 0.004, 0.001).asDiagonal();
+  for (int trial = 0; trial < kTrials; ++trial) {
+    const Pose2 truth{rng.Uniform(-5, 5), rng.Uniform(-5, 5), rng.Uniform(-3, 3)};
+    const Pose2 shared = SamplePose(&rng, Pose2{}, dep);  // one error shared by all repeats
+    TransformEstimate fused, naive;
+    for (int k = 0; k < kRepeats; ++k) {
+      TransformEstimate e;
+      e.t = Pose2::FromVector(SamplePose(&rng, truth, ind).Vector() + shared.Vector());
+      e.dependent = dep;
+      e.independent = ind;
+      if (k == 0) {
+        fused = e;
+        naive = e;
+        continue;
+      }
+      const TransformEstimate before = fused;
+      fused = FuseSplitCi(fused, e);
+      EXPECT_LE(fused.Covariance().trace(), before.Covariance().trace() + 1e-12);
+      // Naive information fusion that counts the shared error as independent.
+      TransformEstimate a = naive, b = e;
+      a.independent = naive.Covariance();
+      a.dependent.setZero();
+      b.independent = e.Covariance();
+      b.dependent.setZero();
+      naive = FuseSplitCi(a, b);
+    }
+    nees_sum += Nees(fused.t, truth, fused.Covariance());
+    naive_sum += Nees(naive.t, truth, naive.Covariance());
+  }
+  EXPECT_LT(nees_sum / kTrials, 3.0 * 1.1);
+  EXPECT_GT(naive_sum / kTrials, 3.0 * 1.5);  // the overconfidence SCI avoids
+}
+
+TEST(Rendezvous, ChiSquare3Quantile) {
+  EXPECT_NEAR(ChiSquare3Quantile(0.95), 7.8147, 1e-3);
+  EXPECT_NEAR(ChiSquare3Quantile(0.999), 16.266, 1e-2);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cooperation among agents, in process, with a fake filter.
+
+// A filter whose estimate the test sets; merges like FastSLAM's rule for one hypothesis.
+class FakeFilter : public SlamFilter {
+ public:
+  void Process(const common::SensorStep&) override {}
+  FilterEstimate Estimate() const override { return estimate; }
+  int MergeLandmarks(const std::vector<MapLandmark>& in, common::MapFusionRule rule, double gate_probability) override {
+    ++merges;
+    std::vector<MatchCandidate> own, incoming;
+    for (const auto& l : estimate.landmarks)
+      own.push_back({l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id});
+    for (const auto& l : in) incoming.push_back({l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id});
+    const std::vector<int> match = MatchLandmarks(own, incoming, common::ChiSquare2Quantile(gate_probability));
+    int added = 0;
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      if (match[i] < 0) {
+        estimate.landmarks.push_back(in[i]);
+        estimate.landmarks.back().track_id = 1000 + added;
+        ++added;
+        continue;
+      }
+      MapLandmark& l = estimate.landmarks[match[i]];
+      Eigen::VectorXd x = l.mean.head<2>();
+      Eigen::MatrixXd p = l.covariance.topLeftCorner<2, 2>();
+      FuseObservation(&x, &p, in[i].mean.head<2>(), in[i].covariance.topLeftCorner<2, 2>(), rule);
+      l.mean.head<2>() = x;
+      l.covariance.topLeftCorner<2, 2>() = p;
+    }
+    return added;
+  }
+  bool ObserveKnownRobot(const Eigen::Vector2d&, const Eigen::Matrix2d&, double, double) override {
+    ++robot_observations;
+    return true;
+  }
+
+  FilterEstimate estimate;
+  int merges = 0;
+  int robot_observations = 0;
+};
+
+common::ScenarioOptions Scenario(int robots) {
+  common::ScenarioOptions s;
+  s.name = "cooperation_test";
+  const Pose2 frames[3] = {{0.0, 0.0, 0.0}, {0.347, 2.209, -0.6194}, {-3.0, 1.0, 2.0}};
+  for (int i = 0; i < robots; ++i) {
+    common::RobotOptions r;
+    r.id = "r" + std::to_string(i + 1);
+    r.frame_in_world = frames[i];
+    s.robots.push_back(r);
+  }
+  s.sensors.lidar.range_noise_sd_m = 0.03;
+  s.sensors.lidar.bearing_noise_sd_rad = 0.03;
+  s.rendezvous.enable_from_step = 14;
+  s.rendezvous.window_steps = 1;
+  s.rendezvous.min_interval_steps = 20;
+  return s;
+}
+
+// N agents with fake filters in a small world; the test says when two robots see each other.
+// Pose estimates are the truth in each robot's frame plus noise drawn from the covariance they
+// report, so every number the agents exchange is consistent by construction.
+class Sim {
+ public:
+  using Contact = std::function<bool(std::uint32_t step, int i, int j)>;
+  Sim(common::ScenarioOptions scenario, Contact contact, std::uint64_t seed)
+      : scenario_(std::move(scenario)), contact_(std::move(contact)), rng_(seed, "sim") {
+    // Landmarks in W; robot i knows landmarks i and i + 1 (neighbours share one).
+    for (int l = 0; l < static_cast<int>(scenario_.robots.size()) + 1; ++l) {
+      landmarks_.push_back({3.0 * l - 2.0, 4.0 - l});
+    }
+    for (std::size_t i = 0; i < scenario_.robots.size(); ++i) {
+      agents_.push_back(std::make_unique<Cooperation>(scenario_, scenario_.robots[i].id));
+      filters_.push_back(std::make_unique<FakeFilter>());
+      for (std::size_t l = i; l <= i + 1; ++l) {
+        MapLandmark m;
+        m.track_id = static_cast<std::uint32_t>(l + 1);
+        const Eigen::Vector2d p = common::TransformPoint(common::Inverse(Frame(i)), landmarks_[l]);
+        m.covariance = Eigen::Vector3d(1e-3, 1e-3, 1.0).asDiagonal();
+        m.mean = {p.x() + rng_.Normal(0, std::sqrt(1e-3)), p.y() + rng_.Normal(0, std::sqrt(1e-3)), 0.0};
+        filters_[i]->estimate.landmarks.push_back(m);
+      }
+    }
+    inbox_.resize(scenario_.robots.size());
+  }
+
+  Pose2 Frame(std::size_t i) const { return scenario_.robots[i].frame_in_world; }
+  // Robot i in W at step k: circles near the origin, so every pair is within lidar range.
+  Pose2 Truth(std::size_t i, std::uint32_t k) const {
+    const double a = 0.15 * k + 2.0 * static_cast<double>(i);
+    const Eigen::Vector2d center(1.2 * static_cast<double>(i), 0.5 * static_cast<double>(i));
+    return {center.x() + 1.5 * std::cos(a), center.y() + 1.5 * std::sin(a), common::WrapAngle(a + common::kPi / 2)};
+  }
+  Pose2 TrueTransform(std::size_t i, std::size_t j) const {
+    return common::Compose(common::Inverse(Frame(i)), Frame(j));
+  }
+
+  void Run(std::uint32_t steps) {
+    for (std::uint32_t k = step_ + 1; k <= step_ + steps; ++k) StepOnce(k);
+    step_ += steps;
+  }
+
+  Cooperation& agent(std::size_t i) { return *agents_[i]; }
+  FakeFilter& filter(std::size_t i) { return *filters_[i]; }
+  std::uint32_t step() const { return step_; }
+  const std::vector<Eigen::Vector2d>& landmarks() const { return landmarks_; }
+  int sent_maps = 0;
+
+ private:
+  void StepOnce(std::uint32_t k) {
+    const std::size_t n = agents_.size();
+    std::vector<PeerInbox> next(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      agents_[i]->Receive(inbox_[i], filters_[i].get());
+      const Eigen::Matrix3d cov = Eigen::Vector3d(4e-4, 4e-4, 1e-4).asDiagonal();
+      FilterEstimate& e = filters_[i]->estimate;
+      e.step = k;
+      e.time_s = 0.65 * k;
+      e.covariance = cov;
+      e.pose = SamplePose(&rng_, common::Compose(common::Inverse(Frame(i)), Truth(i, k)), cov);
+      common::LidarScan scan;
+      scan.stamp = {scenario_.robots[i].id, k, e.time_s};
+      for (std::size_t j = 0; j < n; ++j) {
+        if (j == i || !contact_(k, static_cast<int>(std::min(i, j)), static_cast<int>(std::max(i, j)))) continue;
+        const common::RangeBearing z = common::MeasureRangeBearing(Truth(i, k), Truth(j, k).Translation());
+        scan.robots.push_back({e.time_s, z.range_m + rng_.Normal(0, 0.03),
+                               common::WrapAngle(z.bearing_rad + rng_.Normal(0, 0.03)), scenario_.robots[j].id});
+      }
+      const PeerOutbox out = agents_[i]->AfterStep(scan, filters_[i]->Estimate());
+      for (const auto& m : out.measurements) next[Index(m.header.recipient)].measurements.push_back(m);
+      for (const auto& m : out.maps) {
+        next[Index(m.header.recipient)].maps.push_back(m);
+        ++sent_maps;
+      }
+    }
+    inbox_ = std::move(next);
+  }
+  std::size_t Index(const std::string& id) const { return static_cast<std::size_t>(scenario_.RobotIndex(id)); }
+
+  common::ScenarioOptions scenario_;
+  Contact contact_;
+  common::Rng rng_;
+  std::vector<Eigen::Vector2d> landmarks_;
+  std::vector<std::unique_ptr<Cooperation>> agents_;
+  std::vector<std::unique_ptr<FakeFilter>> filters_;
+  std::vector<PeerInbox> inbox_;
+  std::uint32_t step_ = 0;
+};
+
+// The transform an agent holds to peer (a copy), if any.
+std::optional<FrameTransform> Find(const std::vector<FrameTransform>& ts, const std::string& peer) {
+  for (const auto& t : ts) {
+    if (t.peer == peer) return t;
+  }
+  return std::nullopt;
+}
+
+TEST(Cooperation, TwoAgentsMeetAgreeAndMergeMaps) {
+  // In sight of each other from step 5 to 30 (the detector acts from step 14).
+  Sim sim(
+      Scenario(2), [](std::uint32_t k, int, int) { return k >= 5 && k <= 30; }, 21);
+  sim.Run(14);
+  EXPECT_TRUE(sim.agent(0).rendezvous().empty());  // step 14's messages arrive at 15
+  sim.Run(1);
+  ASSERT_EQ(sim.agent(0).rendezvous().size(), 1u);
+  ASSERT_EQ(sim.agent(1).rendezvous().size(), 1u);
+  EXPECT_EQ(sim.agent(0).rendezvous()[0].peer, "r2");
+  EXPECT_EQ(sim.agent(1).rendezvous()[0].peer, "r1");
+  EXPECT_EQ(sim.agent(0).rendezvous()[0].step, 14u);
+  EXPECT_EQ(sim.agent(1).rendezvous()[0].step, 14u);
+  EXPECT_EQ(sim.agent(0).frames_known(), std::vector<std::string>{"r2"});
+  EXPECT_EQ(sim.sent_maps, 2);  // one snapshot each way, in AfterStep of step 15
+  EXPECT_EQ(sim.filter(0).merges, 0);
+  sim.Run(1);
+  EXPECT_EQ(sim.filter(0).merges, 1);
+  EXPECT_EQ(sim.filter(1).merges, 1);
+  // Each knew 2 landmarks, one shared: the merged maps hold 3, in the right place.
+  for (std::size_t i = 0; i < 2; ++i) {
+    ASSERT_EQ(sim.filter(i).estimate.landmarks.size(), 3u) << "robot " << i;
+    for (const auto& l : sim.filter(i).estimate.landmarks) {
+      double best = std::numeric_limits<double>::infinity();
+      for (const auto& truth : sim.landmarks()) {
+        const Eigen::Vector2d in_own = common::TransformPoint(common::Inverse(sim.Frame(i)), truth);
+        best = std::min(best, (in_own - l.mean.head<2>()).norm());
+      }
+      EXPECT_LT(best, 0.3);
+    }
+  }
+  sim.Run(30);
+  // One continuous contact: one rendezvous, refined; later contact steps change nothing else.
+  ASSERT_EQ(sim.agent(0).rendezvous().size(), 1u);
+  EXPECT_EQ(sim.sent_maps, 2);
+  const RendezvousEvent& e01 = sim.agent(0).rendezvous()[0];
+  const RendezvousEvent& e10 = sim.agent(1).rendezvous()[0];
+  EXPECT_THAT(common::Compose(e01.t_self_peer, e10.t_self_peer), IsNearlyPose(Pose2{}, 0.01));
+  EXPECT_LT(Nees(e01.t_self_peer, sim.TrueTransform(0, 1), e01.covariance), 16.3);  // chi2(3) 0.999
+  const std::optional<FrameTransform> t01 = Find(sim.agent(0).known_transforms(), "r2");
+  const std::optional<FrameTransform> t10 = Find(sim.agent(1).known_transforms(), "r1");
+  ASSERT_TRUE(t01.has_value());
+  ASSERT_TRUE(t10.has_value());
+  EXPECT_THAT(common::Compose(t01->t_self_peer, t10->t_self_peer), IsNearlyPose(Pose2{}, 0.01));
+  EXPECT_LT(Nees(t01->t_self_peer, sim.TrueTransform(0, 1), t01->covariance), 16.3);
+  EXPECT_EQ(sim.agent(0).rejected_messages(), 0);
+  EXPECT_EQ(sim.agent(1).rejected_messages(), 0);
+}
+
+// The refined transform stays consistent over seeds and is more precise than one detection.
+TEST(Cooperation, RefinedTransformIsConsistentOverSeeds) {
+  double nees_sum = 0.0;
+  constexpr int kSeeds = 200;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    Sim sim(
+        Scenario(2), [](std::uint32_t k, int, int) { return k >= 14 && k <= 24; }, 100 + seed);
+    sim.Run(26);
+    const RendezvousEvent& e = sim.agent(0).rendezvous().at(0);
+    nees_sum += Nees(e.t_self_peer, sim.TrueTransform(0, 1), e.covariance);
+  }
+  EXPECT_LT(nees_sum / kSeeds, 3.0 * 1.2);
+}
+
+TEST(Cooperation, RendezvousRepeatsOnlyAfterTheMinimumInterval) {
+  // Contacts at 14-16, 25-26 (too soon: refines, no event), 40-41 (a second rendezvous).
+  Sim sim(
+      Scenario(2),
+      [](std::uint32_t k, int, int) { return (k >= 14 && k <= 16) || (k >= 25 && k <= 26) || (k >= 40 && k <= 41); },
+      5);
+  sim.Run(50);
+  ASSERT_EQ(sim.agent(0).rendezvous().size(), 2u);
+  EXPECT_EQ(sim.agent(0).rendezvous()[1].step, 40u);
+  EXPECT_EQ(sim.agent(1).rendezvous()[1].step, 40u);
+  EXPECT_EQ(sim.sent_maps, 4);
+  EXPECT_EQ(sim.filter(0).merges, 2);
+}
+
+TEST(Cooperation, NothingBeforeTheDetectorIsEnabled) {
+  Sim sim(
+      Scenario(2), [](std::uint32_t k, int, int) { return k < 14; }, 5);
+  sim.Run(20);
+  EXPECT_TRUE(sim.agent(0).rendezvous().empty());
+  EXPECT_TRUE(sim.agent(0).frames_known().empty());
+}
+
+TEST(Cooperation, FramesChainThroughPeers) {
+  // r1-r2 meet at 14; r2-r3 at 20; r1-r2 again at 40 (r2's snapshot carries T(G2 <- G3)).
+  Sim sim(
+      Scenario(3),
+      [](std::uint32_t k, int i, int j) {
+        if (i == 0 && j == 1) return (k >= 14 && k <= 15) || (k >= 40 && k <= 41);
+        if (i == 1 && j == 2) return k >= 20 && k <= 21;
+        return false;
+      },
+      9);
+  sim.Run(30);
+  EXPECT_EQ(sim.agent(0).frames_known(), std::vector<std::string>{"r2"});
+  // r3 learnt r1's frame from r2's snapshot at their rendezvous, never meeting r1.
+  EXPECT_EQ(sim.agent(2).frames_known(), (std::vector<std::string>{"r1", "r2"}));
+  sim.Run(20);
+  EXPECT_EQ(sim.agent(0).frames_known(), (std::vector<std::string>{"r2", "r3"}));
+  const std::optional<FrameTransform> t13 = Find(sim.agent(0).known_transforms(), "r3");
+  ASSERT_TRUE(t13.has_value());
+  EXPECT_LT(Nees(t13->t_self_peer, sim.TrueTransform(0, 2), t13->covariance), 16.3);
+  const std::optional<FrameTransform> t31 = Find(sim.agent(2).known_transforms(), "r1");
+  ASSERT_TRUE(t31.has_value());
+  EXPECT_LT(Nees(t31->t_self_peer, sim.TrueTransform(2, 0), t31->covariance), 16.3);
+  // Maps spread: r1 holds r3's landmark (index 3) after the second meeting with r2.
+  const Eigen::Vector2d l3 = common::TransformPoint(common::Inverse(sim.Frame(0)), sim.landmarks()[3]);
+  bool found = false;
+  for (const auto& l : sim.filter(0).estimate.landmarks) found = found || (l.mean.head<2>() - l3).norm() < 0.3;
+  EXPECT_TRUE(found);
+}
+
+TEST(Cooperation, CooperativeLocalizationUsesDetectionsAfterTheRefinement) {
+  common::ScenarioOptions s = Scenario(2);
+  s.cooperation.cooperative_localization = true;
+  Sim sim(
+      s, [](std::uint32_t k, int, int) { return k >= 14 && k <= 40; }, 3);
+  sim.Run(45);
+  // Steps 14..24 refine the transform; 25..40 correct the pose (applied at the next step).
+  EXPECT_EQ(sim.filter(0).robot_observations, 16);
+  EXPECT_EQ(sim.agent(0).cooperative_updates(), 16);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile or broken peer input: rejected, counted, the map unchanged.
+
+class HostileInput : public ::testing::Test {
+ protected:
+  HostileInput()
+      : sim_(
+            Scenario(3), [](std::uint32_t k, int i, int j) { return i == 0 && j == 1 && k >= 14 && k <= 15; }, 4) {
+    sim_.Run(20);  // r1 knows r2's frame; r3 is a known robot whose frame r1 does not know
+  }
+
+  MapSnapshot GoodSnapshot() const {
+    MapSnapshot m;
+    m.header = {"r2", "r1", sim_.step(), 13.0, 1};
+    MapLandmark l;
+    l.mean = {10.0, 10.0, 0.0};
+    l.covariance = Eigen::Vector3d(0.01, 0.01, 1.0).asDiagonal();
+    m.landmarks.push_back(l);
+    return m;
+  }
+  RelativeMeasurement GoodMeasurement() const {
+    RelativeMeasurement m;
+    m.header = {"r2", "r1", sim_.step(), 13.0, 1};
+    m.range_m = 2.0;
+    m.bearing_rad = 0.5;
+    m.sender_covariance = Eigen::Matrix3d::Identity() * 1e-3;
+    return m;
+  }
+  // Applies the inbox; expects it rejected (one count per message) with the map unchanged.
+  void ExpectRejected(const PeerInbox& inbox) {
+    Cooperation& a = sim_.agent(0);
+    const int before = a.rejected_messages();
+    const auto landmarks = sim_.filter(0).estimate.landmarks;
+    const int merges = sim_.filter(0).merges;
+    const auto frames = a.frames_known();
+    a.Receive(inbox, &sim_.filter(0));
+    EXPECT_EQ(a.rejected_messages(),
+              before + static_cast<int>(inbox.measurements.size() + inbox.maps.size() + inbox.moved.size()));
+    EXPECT_EQ(sim_.filter(0).merges, merges);
+    EXPECT_EQ(sim_.filter(0).estimate.landmarks.size(), landmarks.size());
+    EXPECT_EQ(a.frames_known(), frames);
+  }
+
+  Sim sim_;
+};
+
+TEST_F(HostileInput, GoodSnapshotIsMerged) {
+  ASSERT_EQ(sim_.agent(0).frames_known(), std::vector<std::string>{"r2"});
+  const int merges = sim_.filter(0).merges;
+  sim_.agent(0).Receive({{}, {GoodSnapshot()}, {}}, &sim_.filter(0));
+  EXPECT_EQ(sim_.filter(0).merges, merges + 1);
+  EXPECT_EQ(sim_.agent(0).rejected_messages(), 0);
+}
+
+TEST_F(HostileInput, NanAndInfinity) {
+  MapSnapshot a = GoodSnapshot();
+  a.landmarks[0].mean.x() = std::nan("");
+  MapSnapshot b = GoodSnapshot();
+  b.landmarks[0].covariance(1, 1) = std::numeric_limits<double>::infinity();
+  MapSnapshot c = GoodSnapshot();
+  c.landmarks[0].v_mps = std::nan("");
+  RelativeMeasurement m = GoodMeasurement();
+  m.range_m = std::nan("");
+  RelativeMeasurement n = GoodMeasurement();
+  n.sender_pose.heading = std::numeric_limits<double>::infinity();
+  ExpectRejected({{m, n}, {a, b, c}, {}});
+}
+
+TEST_F(HostileInput, CovarianceNotSymmetricPositiveDefinite) {
+  MapSnapshot a = GoodSnapshot();
+  a.landmarks[0].covariance(0, 0) = -0.01;
+  MapSnapshot b = GoodSnapshot();
+  b.landmarks[0].covariance(0, 1) = 0.005;  // not symmetric
+  MapSnapshot c = GoodSnapshot();
+  c.known_transforms.push_back({"r3", 1, {1.0, 2.0, 0.3}, Eigen::Matrix3d::Zero()});
+  RelativeMeasurement m = GoodMeasurement();
+  m.sender_covariance(2, 2) = 0.0;
+  ExpectRejected({{m}, {a, b, c}, {}});
+}
+
+TEST_F(HostileInput, UnknownRobots) {
+  MapSnapshot a = GoodSnapshot();
+  a.header.sender = "r9";
+  MapSnapshot b = GoodSnapshot();
+  b.known_transforms.push_back({"r9", 1, {1.0, 2.0, 0.3}, Eigen::Matrix3d::Identity()});
+  MapSnapshot c = GoodSnapshot();
+  c.header.recipient = "r3";
+  RelativeMeasurement m = GoodMeasurement();
+  m.header.sender = "r1";  // itself
+  LandmarkMovedNotice n;
+  n.header = {"r7", "r1", sim_.step(), 0.0, 1};
+  ExpectRejected({{m}, {a, b, c}, {n}});
+}
+
+TEST_F(HostileInput, AbsurdSize) {
+  MapSnapshot a = GoodSnapshot();
+  a.landmarks.assign(257, a.landmarks[0]);
+  ExpectRejected({{}, {a}, {}});
+}
+
+TEST_F(HostileInput, StaleAndFutureSteps) {
+  sim_.agent(0).Receive({{}, {GoodSnapshot()}, {}}, &sim_.filter(0));
+  MapSnapshot a = GoodSnapshot();
+  a.header.step = sim_.step() - 5;  // older than the one just applied
+  MapSnapshot b = GoodSnapshot();
+  b.header.step = sim_.step() + 100;
+  RelativeMeasurement m = GoodMeasurement();
+  m.header.step = 14;  // r2's measurements up to step 15 were applied
+  ExpectRejected({{m}, {a, b}, {}});
+}
+
+TEST_F(HostileInput, SnapshotFromAPeerWhoseFrameIsUnknown) {
+  MapSnapshot a = GoodSnapshot();
+  a.header.sender = "r3";
+  ExpectRejected({{}, {a}, {}});
+}
+
+TEST_F(HostileInput, MovedNoticesAreValidatedAndCounted) {
+  LandmarkMovedNotice good;
+  good.header = {"r2", "r1", sim_.step(), 0.0, 1};
+  good.position_in_sender = {1.0, 2.0};
+  sim_.agent(0).Receive({{}, {}, {good}}, &sim_.filter(0));
+  EXPECT_EQ(sim_.agent(0).moved_notices(), 1);
+  LandmarkMovedNotice bad = good;
+  bad.position_in_sender.x() = std::nan("");
+  ExpectRejected({{}, {}, {bad}});
+  EXPECT_EQ(sim_.agent(0).moved_notices(), 1);
+}
+
+// ---------------------------------------------------------------------------------------------
+// With the FastSLAM filter.
+
+// r1 (a FastSLAM agent) has mapped two static landmarks; r2 is a second robot of the scenario.
+class WithFastSlam : public ::testing::TestWithParam<common::LandmarkKinematics> {
+ protected:
+  void SetUp() override {
+    options_ = testing::OneRobotScenario(0.2, 0.0, 100);
+    options_.filter.landmark_kinematics = GetParam();
+    options_.filter.known_kinematics = {{0.0, 0.0}, {0.4, 0.2}};
+    testing::AddLandmark(&options_, 1, {2.0, 0.5, 0.0});
+    testing::AddLandmark(&options_, 2, {0.5, 2.0, 0.0});
+    common::RobotOptions r2;
+    r2.id = "r2";
+    r2.frame_in_world = {1.0, 1.0, 0.5};
+    options_.robots.push_back(r2);
+    options_.rendezvous.enable_from_step = 0;
+    filter_ = CreateFilter(options_, "r1", 3);
+    testing::TinyWorld world(options_, 3);
+    for (int k = 0; k < 8; ++k) filter_->Process(world.Step());
+    ASSERT_EQ(filter_->Estimate().landmarks.size(), 2u);
+  }
+
+  // Lets r1's agent learn r2's frame from one mutual detection at step 8 (the filter's step).
+  void Meet(Cooperation* agent) {
+    const FilterEstimate e = filter_->Estimate();
+    common::LidarScan scan;
+    scan.stamp = {"r1", e.step, e.time_s};
+    scan.robots.push_back({e.time_s, 2.0, 0.3, "r2"});
+    agent->AfterStep(scan, e);
+    RelativeMeasurement m;
+    m.header = {"r2", "r1", e.step, e.time_s, 1};
+    m.range_m = 2.0;
+    m.bearing_rad = -0.4;
+    m.sender_pose = {0.5, 0.5, 0.1};
+    m.sender_covariance = Eigen::Matrix3d::Identity() * 1e-3;
+    agent->Receive({{m}, {}, {}}, filter_.get());
+    ASSERT_EQ(agent->frames_known(), std::vector<std::string>{"r2"});
+  }
+
+  common::ScenarioOptions options_;
+  std::unique_ptr<SlamFilter> filter_;
+};
+
+void ExpectSameEstimate(const FilterEstimate& a, const FilterEstimate& b) {
+  EXPECT_EQ(a.pose.Vector(), b.pose.Vector());
+  ASSERT_EQ(a.landmarks.size(), b.landmarks.size());
+  for (std::size_t i = 0; i < a.landmarks.size(); ++i) {
+    EXPECT_EQ(a.landmarks[i].track_id, b.landmarks[i].track_id);
+    EXPECT_EQ(a.landmarks[i].mean, b.landmarks[i].mean);
+    EXPECT_EQ(a.landmarks[i].covariance, b.landmarks[i].covariance);
+  }
+}
+
+TEST_P(WithFastSlam, MergeFusesMatchedAndAddsNewLandmarks) {
+  const FilterEstimate before = filter_->Estimate();
+  std::vector<MapLandmark> in(2);
+  // The first landmark as a peer with the same knowledge would hold it.
+  in[0].mean = before.landmarks[0].mean;
+  in[0].covariance = before.landmarks[0].covariance;
+  in[1].mean = {-3.0, -2.0, 0.0};  // a landmark this robot never saw
+  in[1].covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
+  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999), 1);
+  const FilterEstimate after = filter_->Estimate();
+  ASSERT_EQ(after.landmarks.size(), 3u);
+  int near_new = 0;
+  for (const auto& l : after.landmarks) {
+    if ((l.mean.head<2>() - Eigen::Vector2d(-3.0, -2.0)).norm() < 1e-9) ++near_new;
+    EXPECT_FALSE(l.tentative);
+  }
+  EXPECT_EQ(near_new, 1);
+  // The matched landmark's covariance does not grow (CI: no larger determinant than either).
+  for (const auto& b : before.landmarks) {
+    for (const auto& a : after.landmarks) {
+      if (a.track_id != b.track_id) continue;
+      const double det_after = a.covariance.topLeftCorner<2, 2>().determinant();
+      const double det_before = b.covariance.topLeftCorner<2, 2>().determinant();
+      EXPECT_LE(det_after, det_before * (1.0 + 1e-9));
+    }
+  }
+  // SLAM goes on with the merged map.
+  testing::TinyWorld world(options_, 4);
+  for (int k = 0; k < 3; ++k) filter_->Process(world.Step());
+  EXPECT_GE(filter_->Estimate().landmarks.size(), 2u);
+}
+
+TEST_P(WithFastSlam, MergeKeepsCopyOnWriteSharing) {
+  auto* fast = dynamic_cast<FastSlam<2>*>(filter_.get());
+  if (fast == nullptr) GTEST_SKIP() << "checked on the static instantiation";
+  std::vector<MapLandmark> in(1);
+  in[0].mean = {-3.0, -2.0, 0.0};
+  in[0].covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
+  filter_->MergeLandmarks(in, common::MapFusionRule::kWeighted, 0.999);
+  // Blocks are never shared by two particles after one of them wrote (each particle's storage
+  // addresses are its own where it wrote); every particle holds the added landmark.
+  for (int p = 0; p < fast->NumParticles(); ++p) EXPECT_EQ(fast->ParticleLandmarkCount(p), 3);
+}
+
+TEST_P(WithFastSlam, RejectedSnapshotsLeaveTheEstimateUnchanged) {
+  Cooperation agent(options_, "r1");
+  Meet(&agent);
+  const FilterEstimate before = filter_->Estimate();
+  MapSnapshot good;
+  good.header = {"r2", "r1", before.step, before.time_s, 2};
+  MapLandmark l;
+  l.mean = {1.0, 1.0, 0.0};
+  l.covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
+  good.landmarks.push_back(l);
+  MapSnapshot nan = good;
+  nan.landmarks[0].mean.y() = std::nan("");
+  MapSnapshot not_pd = good;
+  not_pd.landmarks[0].covariance(1, 1) = -1.0;
+  MapSnapshot too_big = good;
+  too_big.landmarks.assign(300, l);
+  MapSnapshot unknown = good;
+  unknown.header.sender = "r5";
+  agent.Receive({{}, {nan, not_pd, too_big, unknown}, {}}, filter_.get());
+  EXPECT_EQ(agent.rejected_messages(), 4);
+  ExpectSameEstimate(filter_->Estimate(), before);
+  agent.Receive({{}, {good}, {}}, filter_.get());
+  EXPECT_EQ(agent.rejected_messages(), 4);
+  EXPECT_EQ(filter_->Estimate().landmarks.size(), before.landmarks.size() + 1);
+}
+
+TEST_P(WithFastSlam, ObservingAKnownRobotReweightsParticles) {
+  auto* fast = dynamic_cast<FastSlam<2>*>(filter_.get());
+  if (fast == nullptr) GTEST_SKIP() << "checked on the static instantiation";
+  // A robot 2 m ahead of the mean pose: particles that agree gain weight.
+  const FilterEstimate e = filter_->Estimate();
+  const Eigen::Vector2d there = common::PointFromRangeBearing(e.pose, {2.0, 0.0});
+  ASSERT_TRUE(filter_->ObserveKnownRobot(there, Eigen::Matrix2d::Identity() * 1e-4, 2.0, 0.0));
+  double sum = 0.0;
+  for (int p = 0; p < fast->NumParticles(); ++p) sum += fast->ParticleWeight(p);
+  EXPECT_NEAR(sum, 1.0, 1e-9);
+}
+
+INSTANTIATE_TEST_SUITE_P(Kinematics, WithFastSlam,
+                         ::testing::Values(common::LandmarkKinematics::kStatic,
+                                           common::LandmarkKinematics::kKnownCandidates,
+                                           common::LandmarkKinematics::kConstantTurnRate));
+
+// ---------------------------------------------------------------------------------------------
+// The scenario section.
+
+TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
+  const char* base = "name: t\nrun: {steps: 10, dt_s: 0.1}\nrobots: [{id: r1, pose: [0, 0, 0]}]\n";
+  common::ScenarioOptions o = common::CreateScenarioOptions(YAML::Load(base));
+  EXPECT_EQ(o.cooperation.map_fusion, common::MapFusionRule::kCovarianceIntersection);
+  EXPECT_TRUE(o.cooperation.merge_maps);
+  EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 256);
+  o = common::CreateScenarioOptions(YAML::Load(std::string(base) +
+                                               "cooperation: {map_fusion: average, merge_maps: false, "
+                                               "max_snapshot_landmarks: 10, cooperative_localization: true}\n"));
+  EXPECT_EQ(o.cooperation.map_fusion, common::MapFusionRule::kAverage);
+  EXPECT_FALSE(o.cooperation.merge_maps);
+  EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 10);
+  EXPECT_TRUE(o.cooperation.cooperative_localization);
+  EXPECT_THROW(common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {fusion: x}\n")),
+               common::ScenarioError);
+  EXPECT_THROW(common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {map_fusion: x}\n")),
+               common::ScenarioError);
+  o = common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {max_snapshot_landmarks: 0}\n"));
+  std::string error;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("cooperation.max_snapshot_landmarks"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mrslam::robot_agent

@@ -1,0 +1,216 @@
+#include "robot_agent/core/map_fusion.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+
+#include "common/gaussian.h"
+#include "common/rng.h"
+
+namespace mrslam::robot_agent {
+namespace {
+
+using common::MapFusionRule;
+using common::Pose2;
+
+// A random symmetric positive-definite n x n matrix with eigenvalues in [lo, hi].
+Eigen::MatrixXd RandomSpd(common::Rng* rng, int n, double lo, double hi) {
+  Eigen::MatrixXd a(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) a(i, j) = rng->Normal();
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(a);
+  const Eigen::MatrixXd q = qr.householderQ();
+  Eigen::VectorXd d(n);
+  for (int i = 0; i < n; ++i) d(i) = rng->Uniform(lo, hi);
+  return q * d.asDiagonal() * q.transpose();
+}
+
+Eigen::VectorXd Sample(common::Rng* rng, const Eigen::MatrixXd& cov) {
+  const Eigen::LLT<Eigen::MatrixXd> llt(cov);
+  Eigen::VectorXd n(cov.rows());
+  for (int i = 0; i < n.size(); ++i) n(i) = rng->Normal();
+  return llt.matrixL() * n;
+}
+
+// True when b - a is positive semidefinite (a "no larger than" b), to a tolerance.
+bool NoLarger(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(b - a);
+  return es.eigenvalues().minCoeff() > -1e-9 * std::max(1.0, b.norm());
+}
+
+TEST(TransformLandmark, ExactAndConsistent) {
+  common::Rng rng(7, "transform_landmark");
+  double nees_sum = 0.0;
+  constexpr int kTrials = 3000;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    const Pose2 t{rng.Uniform(-5, 5), rng.Uniform(-5, 5), rng.Uniform(-3, 3)};
+    MapLandmark l;
+    l.mean = {rng.Uniform(-5, 5), rng.Uniform(-5, 5), rng.Uniform(-3, 3)};
+    l.covariance = RandomSpd(&rng, 3, 1e-4, 4e-3);
+    const Eigen::Matrix3d t_cov = RandomSpd(&rng, 3, 1e-4, 2e-3);
+    const MapLandmark out = TransformLandmark(l, t, t_cov);
+    // Exact for the means.
+    const Eigen::Vector2d p = common::TransformPoint(t, l.mean.head<2>());
+    EXPECT_NEAR(out.mean.x(), p.x(), 1e-12);
+    EXPECT_NEAR(out.mean.y(), p.y(), 1e-12);
+    EXPECT_NEAR(common::WrapAngle(out.mean.z() - l.mean.z() - t.heading), 0.0, 1e-12);
+    // Consistent: a perturbed transform and landmark fall within the propagated covariance.
+    const Eigen::Vector3d dt = Sample(&rng, t_cov), dl = Sample(&rng, l.covariance);
+    const Pose2 t_true = Pose2::FromVector(t.Vector() + dt);
+    const Pose2 l_true = Pose2::FromVector(l.mean + dl);
+    const Pose2 moved = common::Compose(t_true, l_true);
+    Eigen::Vector3d e(moved.x - out.mean.x(), moved.y - out.mean.y(), common::WrapAngle(moved.heading - out.mean.z()));
+    nees_sum += e.dot(out.covariance.ldlt().solve(e));
+  }
+  const double mean_nees = nees_sum / kTrials;
+  // Mean of 3000 chi-square(3) draws: 3 +- 3.3 sd (sd = sqrt(6 / 3000) = 0.045).
+  EXPECT_GT(mean_nees, 2.85);
+  EXPECT_LT(mean_nees, 3.15);
+}
+
+TEST(FuseObservation, WeightedIsInformationFusion) {
+  common::Rng rng(11, "weighted");
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::MatrixXd pa = RandomSpd(&rng, 3, 0.01, 1.0), pb = RandomSpd(&rng, 3, 0.01, 1.0);
+    Eigen::VectorXd xa(3), xb(3);
+    xa << rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1);
+    xb << rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1);
+    Eigen::VectorXd x = xa;
+    Eigen::MatrixXd p = pa;
+    ASSERT_TRUE(FuseObservation(&x, &p, xb, pb, MapFusionRule::kWeighted));
+    const Eigen::MatrixXd info = pa.inverse() + pb.inverse();
+    const Eigen::MatrixXd p_expected = info.inverse();
+    const Eigen::VectorXd x_expected = p_expected * (pa.inverse() * xa + pb.inverse() * xb);
+    EXPECT_LT((p - p_expected).norm(), 1e-9);
+    EXPECT_LT((x - x_expected).norm(), 1e-9);
+  }
+}
+
+// For independent inputs, information fusion gives a covariance no larger than either input
+// (P <= A and P <= B in the positive-semidefinite order); covariance intersection, which gives up
+// that gain to stay consistent under any correlation, gives a determinant no larger than either.
+TEST(FuseObservation, FusedCovarianceNoLargerThanInputs) {
+  common::Rng rng(12, "no_larger");
+  for (const MapFusionRule rule : {MapFusionRule::kWeighted, MapFusionRule::kCovarianceIntersection}) {
+    for (int trial = 0; trial < 300; ++trial) {
+      const Eigen::MatrixXd pa = RandomSpd(&rng, 3, 0.01, 1.0), pb = RandomSpd(&rng, 3, 0.01, 1.0);
+      Eigen::VectorXd x = Eigen::VectorXd::Zero(3);
+      Eigen::MatrixXd p = pa;
+      ASSERT_TRUE(FuseObservation(&x, &p, Eigen::VectorXd::Ones(3), pb, rule));
+      if (rule == MapFusionRule::kWeighted) {
+        EXPECT_TRUE(NoLarger(p, pa)) << "trial " << trial;
+        EXPECT_TRUE(NoLarger(p, pb)) << "trial " << trial;
+      } else {
+        EXPECT_LE(p.determinant(), pa.determinant() * (1.0 + 1e-6)) << "trial " << trial;
+        EXPECT_LE(p.determinant(), pb.determinant() * (1.0 + 1e-6)) << "trial " << trial;
+      }
+    }
+  }
+}
+
+// Independent inputs of equal covariance: CI halves nothing but stays within both; the CI
+// ellipse contains the information-fusion one (CI is never tighter than the optimal fusion).
+TEST(FuseObservation, CovarianceIntersectionIsNeverTighterThanInformationFusion) {
+  common::Rng rng(14, "ci_vs_info");
+  for (int trial = 0; trial < 300; ++trial) {
+    const Eigen::MatrixXd pa = RandomSpd(&rng, 2, 0.01, 1.0), pb = RandomSpd(&rng, 2, 0.01, 1.0);
+    Eigen::VectorXd x1 = Eigen::VectorXd::Zero(2), x2 = x1;
+    Eigen::MatrixXd p_ci = pa, p_info = pa;
+    ASSERT_TRUE(FuseObservation(&x1, &p_ci, Eigen::VectorXd::Ones(2), pb, MapFusionRule::kCovarianceIntersection));
+    ASSERT_TRUE(FuseObservation(&x2, &p_info, Eigen::VectorXd::Ones(2), pb, MapFusionRule::kWeighted));
+    EXPECT_TRUE(NoLarger(p_info, p_ci)) << "trial " << trial;
+  }
+}
+
+// Two estimates of one state whose errors are strongly correlated (a shared error): CI stays
+// consistent (mean NEES at most the dimension), information fusion does not.
+TEST(FuseObservation, CovarianceIntersectionConsistentForCorrelatedInputs) {
+  common::Rng rng(13, "ci_correlated");
+  constexpr int kTrials = 4000;
+  const Eigen::MatrixXd shared = RandomSpd(&rng, 2, 0.5, 1.0);
+  const Eigen::MatrixXd own_a = RandomSpd(&rng, 2, 0.05, 0.2), own_b = RandomSpd(&rng, 2, 0.05, 0.2);
+  double nees_ci = 0.0, nees_weighted = 0.0;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    const Eigen::VectorXd common_error = Sample(&rng, shared);
+    const Eigen::VectorXd xa = common_error + Sample(&rng, own_a);
+    const Eigen::VectorXd xb = common_error + Sample(&rng, own_b);
+    // Each input's own covariance is right: shared + own.
+    for (const MapFusionRule rule : {MapFusionRule::kCovarianceIntersection, MapFusionRule::kWeighted}) {
+      Eigen::VectorXd x = xa;
+      Eigen::MatrixXd p = shared + own_a;
+      ASSERT_TRUE(FuseObservation(&x, &p, xb, shared + own_b, rule));
+      const double nees = x.dot(p.ldlt().solve(x));  // the truth is 0
+      (rule == MapFusionRule::kWeighted ? nees_weighted : nees_ci) += nees;
+    }
+  }
+  EXPECT_LT(nees_ci / kTrials, 2.0 * 1.05);
+  EXPECT_GT(nees_weighted / kTrials, 2.0 * 1.3);  // overconfident, as expected
+}
+
+TEST(FuseObservation, AverageIsTheMidpointAndPartialObservationLeavesTheRest) {
+  Eigen::VectorXd x(3);
+  x << 1.0, 2.0, 3.0;
+  Eigen::MatrixXd p = Eigen::MatrixXd::Identity(3, 3) * 0.5;
+  Eigen::VectorXd z(2);
+  z << 3.0, 0.0;
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(2, 2) * 0.1;
+  ASSERT_TRUE(FuseObservation(&x, &p, z, r, MapFusionRule::kAverage));
+  EXPECT_DOUBLE_EQ(x(0), 2.0);
+  EXPECT_DOUBLE_EQ(x(1), 1.0);
+  EXPECT_DOUBLE_EQ(x(2), 3.0);
+  EXPECT_NEAR(p(0, 0), 0.25 * (0.5 + 0.1), 1e-12);
+  EXPECT_DOUBLE_EQ(p(2, 2), 0.5);
+}
+
+TEST(FuseObservation, WrapsTheAngleComponent) {
+  Eigen::VectorXd x(3);
+  x << 0.0, 0.0, common::kPi - 0.05;
+  Eigen::MatrixXd p = Eigen::MatrixXd::Identity(3, 3) * 0.01;
+  Eigen::VectorXd z(3);
+  z << 0.0, 0.0, -common::kPi + 0.05;
+  ASSERT_TRUE(FuseObservation(&x, &p, z, p, MapFusionRule::kWeighted, 2));
+  EXPECT_NEAR(std::abs(x(2)), common::kPi, 1e-9);
+}
+
+TEST(FuseObservation, RejectsUnusableInput) {
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+  Eigen::MatrixXd p = Eigen::MatrixXd::Identity(2, 2);
+  Eigen::VectorXd z(2);
+  z << std::nan(""), 0.0;
+  EXPECT_FALSE(FuseObservation(&x, &p, z, p, MapFusionRule::kCovarianceIntersection));
+  EXPECT_EQ(x, Eigen::VectorXd::Zero(2));
+  EXPECT_FALSE(FuseObservation(&x, &p, Eigen::VectorXd::Zero(3), p, MapFusionRule::kWeighted));
+}
+
+TEST(MatchLandmarks, GatesByMahalanobisAndIdentity) {
+  const double gate = common::ChiSquare2Quantile(0.999);
+  const Eigen::Matrix2d c = Eigen::Matrix2d::Identity() * 0.01;
+  const std::vector<MatchCandidate> own = {{{0.0, 0.0}, c, -1}, {{5.0, 0.0}, c, -1}, {{0.0, 5.0}, c, 7}};
+  const std::vector<MatchCandidate> incoming = {
+      {{5.1, 0.05}, c, -1},   // near own 1
+      {{20.0, 0.0}, c, -1},   // nowhere
+      {{0.05, 0.0}, c, -1},   // near own 0
+      {{9.0, 9.0}, c, 7},     // identity 7: own 2 wherever it is
+      {{0.02, 0.01}, c, -1},  // also near own 0, but own 0 is taken by a closer one? no: farther
+  };
+  const std::vector<int> m = MatchLandmarks(own, incoming, gate);
+  EXPECT_EQ(m[0], 1);
+  EXPECT_EQ(m[1], -1);
+  EXPECT_EQ(m[3], 2);
+  // Own 0 goes to the closest of incoming 2 and 4 (one to one).
+  EXPECT_EQ(m[4], 0);
+  EXPECT_EQ(m[2], -1);
+}
+
+TEST(MatchLandmarks, DifferentIdentitiesNeverMatch) {
+  const Eigen::Matrix2d c = Eigen::Matrix2d::Identity() * 0.01;
+  const std::vector<int> m = MatchLandmarks({{{0.0, 0.0}, c, 1}}, {{{0.0, 0.0}, c, 2}}, 100.0);
+  EXPECT_EQ(m[0], -1);
+}
+
+}  // namespace
+}  // namespace mrslam::robot_agent
