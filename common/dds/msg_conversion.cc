@@ -20,6 +20,22 @@ msg::Pose2D ToMsg(const common::Pose2& p) {
 }
 common::Pose2 FromMsg(const msg::Pose2D& p) { return {p.x_m(), p.y_m(), p.heading_rad()}; }
 
+std::array<double, 9> CovarianceToMsg(const Eigen::Matrix3d& m) {
+  std::array<double, 9> a{};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) a[static_cast<std::size_t>(3 * r + c)] = m(r, c);
+  }
+  return a;
+}
+
+Eigen::Matrix3d CovarianceFromMsg(const std::array<double, 9>& a) {
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m(r, c) = a[static_cast<std::size_t>(3 * r + c)];
+  }
+  return m;
+}
+
 msg::LidarScan ToMsg(const common::LidarScan& scan) {
   msg::LidarScan m;
   m.stamp(ToMsg(scan.stamp));

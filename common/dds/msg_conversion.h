@@ -1,5 +1,9 @@
 #pragma once
 
+#include <array>
+
+#include <Eigen/Core>
+
 #include "common/sensor_types.h"
 #include "mrslam.h"
 
@@ -11,6 +15,9 @@ msg::Stamp ToMsg(const common::Stamp& s);
 common::Stamp FromMsg(const msg::Stamp& s);
 msg::Pose2D ToMsg(const common::Pose2& p);
 common::Pose2 FromMsg(const msg::Pose2D& p);
+// 3x3 covariances travel row-major as double[9].
+std::array<double, 9> CovarianceToMsg(const Eigen::Matrix3d& m);
+Eigen::Matrix3d CovarianceFromMsg(const std::array<double, 9>& a);
 
 msg::LidarScan ToMsg(const common::LidarScan& scan);
 common::LidarScan FromMsg(const msg::LidarScan& scan);

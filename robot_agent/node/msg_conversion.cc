@@ -5,20 +5,6 @@
 namespace mrslam::robot_agent {
 
 namespace {
-std::array<double, 9> ToArray(const Eigen::Matrix3d& m) {
-  std::array<double, 9> a{};
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) a[static_cast<std::size_t>(3 * r + c)] = m(r, c);
-  }
-  return a;
-}
-Eigen::Matrix3d FromArray(const std::array<double, 9>& a) {
-  Eigen::Matrix3d m;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) m(r, c) = a[static_cast<std::size_t>(3 * r + c)];
-  }
-  return m;
-}
 msg::Stamp HeaderStamp(const PeerHeader& h) { return dds::ToMsg(common::Stamp{h.sender, h.step, h.time_s}); }
 PeerHeader HeaderFrom(const msg::Stamp& s, const std::string& recipient, std::uint32_t sequence) {
   return {s.robot_id(), recipient, s.step(), s.time_s(), sequence};
@@ -30,7 +16,7 @@ msg::LandmarkEstimate ToMsg(const MapLandmark& l) {
   m.track_id(l.track_id);
   m.landmark_id(l.landmark_id);
   m.pose(dds::ToMsg(common::Pose2{l.mean.x(), l.mean.y(), l.mean.z()}));
-  m.covariance(ToArray(l.covariance));
+  m.covariance(dds::CovarianceToMsg(l.covariance));
   m.v_mps(l.v_mps);
   m.w_radps(l.w_radps);
   m.motion_model(static_cast<std::uint8_t>(l.motion));
@@ -45,7 +31,7 @@ MapLandmark FromMsg(const msg::LandmarkEstimate& m) {
   l.track_id = m.track_id();
   l.landmark_id = m.landmark_id();
   l.mean = {m.pose().x_m(), m.pose().y_m(), m.pose().heading_rad()};
-  l.covariance = FromArray(m.covariance());
+  l.covariance = dds::CovarianceFromMsg(m.covariance());
   l.v_mps = m.v_mps();
   l.w_radps = m.w_radps();
   l.motion = static_cast<LandmarkMotionKind>(m.motion_model());
@@ -60,17 +46,17 @@ msg::RendezvousEvent ToMsg(const RendezvousEvent& e) {
   m.peer_id(e.peer);
   m.step(e.step);
   m.t_self_peer(dds::ToMsg(e.t_self_peer));
-  m.covariance(ToArray(e.covariance));
+  m.covariance(dds::CovarianceToMsg(e.covariance));
   return m;
 }
 RendezvousEvent FromMsg(const msg::RendezvousEvent& m) {
-  return {m.peer_id(), m.step(), dds::FromMsg(m.t_self_peer()), FromArray(m.covariance())};
+  return {m.peer_id(), m.step(), dds::FromMsg(m.t_self_peer()), dds::CovarianceFromMsg(m.covariance())};
 }
 msg::RendezvousEvent ToMsg(const FrameTransform& t) {
   return ToMsg(RendezvousEvent{t.peer, t.step, t.t_self_peer, t.covariance});
 }
 FrameTransform TransformFromMsg(const msg::RendezvousEvent& m) {
-  return {m.peer_id(), m.step(), dds::FromMsg(m.t_self_peer()), FromArray(m.covariance())};
+  return {m.peer_id(), m.step(), dds::FromMsg(m.t_self_peer()), dds::CovarianceFromMsg(m.covariance())};
 }
 
 msg::Estimate ToMsg(const FilterEstimate& e, const std::string& robot_id, const std::string& filter) {
@@ -78,7 +64,7 @@ msg::Estimate ToMsg(const FilterEstimate& e, const std::string& robot_id, const 
   m.stamp(dds::ToMsg(common::Stamp{robot_id, e.step, e.time_s}));
   m.filter(filter);
   m.pose(dds::ToMsg(e.pose));
-  m.covariance(ToArray(e.covariance));
+  m.covariance(dds::CovarianceToMsg(e.covariance));
   m.effective_sample_size(e.effective_sample_size);
   m.particles(static_cast<std::uint32_t>(e.particles));
   for (const auto& l : e.landmarks) m.landmarks().push_back(ToMsg(l));
@@ -90,7 +76,7 @@ FilterEstimate FromMsg(const msg::Estimate& m) {
   e.step = m.stamp().step();
   e.time_s = m.stamp().time_s();
   e.pose = dds::FromMsg(m.pose());
-  e.covariance = FromArray(m.covariance());
+  e.covariance = dds::CovarianceFromMsg(m.covariance());
   e.effective_sample_size = m.effective_sample_size();
   e.particles = static_cast<int>(m.particles());
   for (const auto& ml : m.landmarks()) e.landmarks.push_back(FromMsg(ml));
@@ -106,7 +92,7 @@ msg::RelativeMeasurement ToMsg(const RelativeMeasurement& r) {
   m.range_m(r.range_m);
   m.bearing_rad(r.bearing_rad);
   m.sender_pose(dds::ToMsg(r.sender_pose));
-  m.sender_covariance(ToArray(r.sender_covariance));
+  m.sender_covariance(dds::CovarianceToMsg(r.sender_covariance));
   return m;
 }
 RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
@@ -116,7 +102,7 @@ RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
   r.range_m = m.range_m();
   r.bearing_rad = m.bearing_rad();
   r.sender_pose = dds::FromMsg(m.sender_pose());
-  r.sender_covariance = FromArray(m.sender_covariance());
+  r.sender_covariance = dds::CovarianceFromMsg(m.sender_covariance());
   return r;
 }
 

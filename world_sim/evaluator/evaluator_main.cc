@@ -21,9 +21,7 @@ RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
   e.step = m.stamp().step();
   e.time_s = m.stamp().time_s();
   e.pose = dds::FromMsg(m.pose());
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) e.covariance(r, c) = m.covariance()[static_cast<std::size_t>(3 * r + c)];
-  }
+  e.covariance = dds::CovarianceFromMsg(m.covariance());
   e.effective_sample_size = m.effective_sample_size();
   for (const auto& l : m.landmarks()) {
     if (l.tentative()) continue;

@@ -1,0 +1,104 @@
+// Round trips of the agent's estimate and peer messages through their DDS types.
+#include "robot_agent/node/msg_conversion.h"
+
+#include <gtest/gtest.h>
+
+namespace mrslam::robot_agent {
+namespace {
+
+MapLandmark SomeLandmark(int k) {
+  MapLandmark l;
+  l.track_id = 10U + static_cast<std::uint32_t>(k);
+  l.landmark_id = k - 1;
+  l.mean = {1.0 * k, -2.0, 0.3};
+  l.covariance = Eigen::Matrix3d::Identity() * (0.1 + k);
+  l.covariance(0, 1) = l.covariance(1, 0) = 0.01;
+  l.v_mps = 0.4;
+  l.w_radps = 0.2;
+  l.motion = LandmarkMotionKind::kUnicycle;
+  l.moving = true;
+  l.tentative = k % 2 == 0;
+  l.last_seen_step = 42;
+  return l;
+}
+
+void ExpectSame(const MapLandmark& a, const MapLandmark& b) {
+  EXPECT_EQ(a.track_id, b.track_id);
+  EXPECT_EQ(a.landmark_id, b.landmark_id);
+  EXPECT_EQ(a.mean, b.mean);
+  EXPECT_EQ(a.covariance, b.covariance);
+  EXPECT_EQ(a.v_mps, b.v_mps);
+  EXPECT_EQ(a.w_radps, b.w_radps);
+  EXPECT_EQ(a.motion, b.motion);
+  EXPECT_EQ(a.moving, b.moving);
+  EXPECT_EQ(a.tentative, b.tentative);
+  EXPECT_EQ(a.last_seen_step, b.last_seen_step);
+}
+
+TEST(AgentMsgConversionTest, EstimateRoundTrip) {
+  FilterEstimate e;
+  e.step = 9;
+  e.time_s = 5.85;
+  e.pose = {1.0, 2.0, -0.4};
+  e.covariance = Eigen::Matrix3d::Identity() * 0.02;
+  e.effective_sample_size = 512.5;
+  e.particles = 1000;
+  e.landmarks = {SomeLandmark(1), SomeLandmark(2)};
+  const auto m = ToMsg(e, "r2", "fastslam");
+  EXPECT_EQ(m.stamp().robot_id(), "r2");
+  EXPECT_EQ(m.filter(), "fastslam");
+  const auto back = FromMsg(m);
+  EXPECT_EQ(back.step, e.step);
+  EXPECT_EQ(back.time_s, e.time_s);
+  EXPECT_EQ(back.pose.heading, e.pose.heading);
+  EXPECT_EQ(back.covariance, e.covariance);
+  EXPECT_EQ(back.effective_sample_size, e.effective_sample_size);
+  EXPECT_EQ(back.particles, e.particles);
+  ASSERT_EQ(back.landmarks.size(), 2U);
+  for (std::size_t i = 0; i < 2; ++i) ExpectSame(back.landmarks[i], e.landmarks[i]);
+}
+
+TEST(AgentMsgConversionTest, PeerMessagesRoundTrip) {
+  RelativeMeasurement r;
+  r.header = {"r1", "r2", 14, 9.1, 3};
+  r.range_m = 4.2;
+  r.bearing_rad = -1.1;
+  r.sender_pose = {0.5, 0.6, 0.7};
+  r.sender_covariance = Eigen::Matrix3d::Identity() * 0.3;
+  const auto rb = FromMsg(ToMsg(r));
+  EXPECT_EQ(rb.header.sender, "r1");
+  EXPECT_EQ(rb.header.recipient, "r2");
+  EXPECT_EQ(rb.header.step, 14U);
+  EXPECT_EQ(rb.header.sequence, 3U);
+  EXPECT_EQ(rb.range_m, r.range_m);
+  EXPECT_EQ(rb.bearing_rad, r.bearing_rad);
+  EXPECT_EQ(rb.sender_pose.y, r.sender_pose.y);
+  EXPECT_EQ(rb.sender_covariance, r.sender_covariance);
+
+  MapSnapshot s;
+  s.header = {"r3", "r1", 20, 13.0, 1};
+  s.landmarks = {SomeLandmark(3)};
+  s.known_transforms.push_back({"r4", 18, {1.0, -2.0, 0.6}, Eigen::Matrix3d::Identity() * 0.05});
+  const auto sb = FromMsg(ToMsg(s));
+  EXPECT_EQ(sb.header.sender, "r3");
+  ASSERT_EQ(sb.landmarks.size(), 1U);
+  ExpectSame(sb.landmarks[0], s.landmarks[0]);
+  ASSERT_EQ(sb.known_transforms.size(), 1U);
+  EXPECT_EQ(sb.known_transforms[0].peer, "r4");
+  EXPECT_EQ(sb.known_transforms[0].t_self_peer.heading, 0.6);
+  EXPECT_EQ(sb.known_transforms[0].covariance, s.known_transforms[0].covariance);
+
+  LandmarkMovedNotice n;
+  n.header = {"r2", "r1", 30, 19.5, 7};
+  n.track_id = 5;
+  n.landmark_id = 12;
+  n.position_in_sender = {3.5, -0.25};
+  const auto nb = FromMsg(ToMsg(n));
+  EXPECT_EQ(nb.track_id, 5U);
+  EXPECT_EQ(nb.landmark_id, 12);
+  EXPECT_EQ(nb.position_in_sender, n.position_in_sender);
+  EXPECT_EQ(nb.header.sequence, 7U);
+}
+
+}  // namespace
+}  // namespace mrslam::robot_agent
