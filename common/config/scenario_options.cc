@@ -1,5 +1,6 @@
 #include "common/config/scenario_options.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -80,11 +81,14 @@ class Section {
     }
   }
 
+  template <typename T>
+  static T Convert(const YAML::Node& n, const std::string& path);
+
  private:
   std::string PathOr(const std::string& fallback) const { return path_.empty() ? fallback : path_; }
 
   template <typename T>
-  static T Convert(const YAML::Node& n, const std::string& path) {
+  static T ConvertImpl(const YAML::Node& n, const std::string& path) {
     try {
       return n.as<T>();
     } catch (const YAML::Exception&) {
@@ -107,6 +111,11 @@ class Section {
   std::string path_;
   std::set<std::string> used_;
 };
+
+template <typename T>
+T Section::Convert(const YAML::Node& n, const std::string& path) {
+  return ConvertImpl<T>(n, path);
+}
 
 YAML::Node RequireSequence(Section& s, const std::string& key) {
   YAML::Node n = s.Raw(key);
@@ -175,13 +184,50 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
   o.name = top.Require<std::string>("name");
   o.seed = top.Get<std::uint64_t>("seed", 1);
 
+  if (top.Has("replay")) {
+    Section r(top.Raw("replay"), "replay");
+    auto& d = o.replay;
+    d.enabled = true;
+    d.dir = r.Require<std::string>("dir");
+    d.step_s = r.Get("step_s", d.step_s);
+    d.start_s = r.Get("start_s", d.start_s);
+    d.duration_s = r.Require<double>("duration_s");
+    if (r.Has("robots")) {
+      const YAML::Node list = r.Raw("robots");
+      if (!list.IsSequence()) throw ScenarioError("scenario key 'replay.robots' must be a list of robot ids");
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        d.robots.push_back(Section::Convert<std::string>(list[i], "replay.robots." + std::to_string(i)));
+      }
+    }
+    r.RejectUnknownKeys();
+  }
+
   {
     Section run(top.Raw("run"), "run");
     o.run.mode = run.GetEnum<RunMode>("mode", RunMode::kLockstep,
                                       {{"lockstep", RunMode::kLockstep}, {"realtime", RunMode::kRealtime}});
     o.run.realtime_factor = run.Get("realtime_factor", o.run.realtime_factor);
-    o.run.steps = run.Require<int>("steps");
-    o.run.dt_s = run.Require<double>("dt_s");
+    if (o.replay.enabled) {
+      // Derived from the replay window; a given run.steps may only shorten it, dt_s must agree.
+      const double ratio = o.replay.duration_s / o.replay.step_s;
+      const int window_steps = o.replay.step_s > 0.0 && std::isfinite(ratio) && ratio < 1e9
+                                   ? static_cast<int>(std::lround(ratio))
+                                   : 0;  // IsValid names the bad replay key
+      o.run.steps = run.Get("steps", window_steps);
+      o.run.dt_s = run.Get("dt_s", o.replay.step_s);
+      if (o.run.steps > window_steps) {
+        throw ScenarioError("scenario key 'run.steps' = " + std::to_string(o.run.steps) +
+                            ": must not exceed replay.duration_s / replay.step_s = " + std::to_string(window_steps));
+      }
+      if (std::abs(o.run.dt_s - o.replay.step_s) > 1e-9) {
+        std::ostringstream m;
+        m << "scenario key 'run.dt_s' = " << o.run.dt_s << ": must equal replay.step_s = " << o.replay.step_s;
+        throw ScenarioError(m.str());
+      }
+    } else {
+      o.run.steps = run.Require<int>("steps");
+      o.run.dt_s = run.Require<double>("dt_s");
+    }
     o.run.ack_timeout_s = run.Get("ack_timeout_s", o.run.ack_timeout_s);
     o.run.domain = run.Get("domain", o.run.domain);
     run.RejectUnknownKeys();
@@ -222,7 +268,10 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     Section s(robots[i], path);
     RobotOptions r;
     r.id = s.Require<std::string>("id");
-    if (!s.Has("pose")) throw ScenarioError("scenario key '" + path + ".pose' is missing (required)");
+    // A replayed robot's pose defaults to its own frame's origin (its first recorded pose).
+    if (!o.replay.enabled && !s.Has("pose")) {
+      throw ScenarioError("scenario key '" + path + ".pose' is missing (required)");
+    }
     r.initial_pose = s.GetPose("pose", {});
     r.frame_in_world = s.GetPose("frame", r.initial_pose);
     r.control = ParseControl(s.Raw("control"), path + ".control");
@@ -306,8 +355,16 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
         f.Get("landmark_turn_rate_prior_sd_radps", d.landmark_turn_rate_prior_sd_radps);
     d.confirm_sightings = f.Get("confirm_sightings", d.confirm_sightings);
     d.drop_after_misses = f.Get("drop_after_misses", d.drop_after_misses);
+    d.ela_gate_probability = f.Get("ela_gate_probability", d.ela_gate_probability);
+    d.ela_return_after_frames = f.Get("ela_return_after_frames", d.ela_return_after_frames);
+    d.ela_drop_unseen_after_frames =
+        f.Get("ela_drop_unseen_after_frames", d.ela_drop_unseen_after_frames);
     d.resample_ess_fraction = f.Get("resample_ess_fraction", d.resample_ess_fraction);
     d.resample_every_step = f.Get("resample_every_step", d.resample_every_step);
+    d.odometry_scale = f.Get("odometry_scale", d.odometry_scale);
+    d.odometry_turn_scale = f.Get("odometry_turn_scale", d.odometry_turn_scale);
+    d.odometry_lag_s = f.Get("odometry_lag_s", d.odometry_lag_s);
+    d.outlier_gate_probability = f.Get("outlier_gate_probability", d.outlier_gate_probability);
     f.RejectUnknownKeys();
   }
 
@@ -337,6 +394,24 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
   }
 
   top.RejectUnknownKeys();
+
+  // A replay of a subset keeps only those robots (in scenario order).
+  if (!o.replay.robots.empty()) {
+    for (std::size_t i = 0; i < o.replay.robots.size(); ++i) {
+      const auto& id = o.replay.robots[i];
+      if (o.RobotIndex(id) < 0) {
+        throw ScenarioError("scenario key 'replay.robots." + std::to_string(i) + "' = '" + id +
+                            "' is not one of the scenario's robots");
+      }
+    }
+    std::vector<RobotOptions> kept;
+    for (const auto& r : o.robots) {
+      if (std::find(o.replay.robots.begin(), o.replay.robots.end(), r.id) != o.replay.robots.end()) {
+        kept.push_back(r);
+      }
+    }
+    o.robots = kept;
+  }
   return o;
 }
 
@@ -375,6 +450,21 @@ std::string PoseText(const Pose2& p) {
 bool ScenarioOptions::IsValid(std::string* error) const {
   Checker c(error);
   c.Check(!name.empty(), "name", "''", "must not be empty");
+  if (replay.enabled) {
+    c.Check(!replay.dir.empty(), "replay.dir", "''", "must not be empty");
+    c.Check(replay.step_s > 0.0 && std::isfinite(replay.step_s), "replay.step_s", replay.step_s, "must be positive");
+    c.Check(replay.start_s >= 0.0 && std::isfinite(replay.start_s), "replay.start_s", replay.start_s,
+            "must not be negative");
+    c.Check(replay.duration_s >= replay.step_s && std::isfinite(replay.duration_s), "replay.duration_s",
+            replay.duration_s, "must be at least replay.step_s");
+    for (std::size_t i = 0; i < robots.size(); ++i) {
+      const auto& id = robots[i].id;
+      const bool subject = id.size() >= 2 && id[0] == 'r' && id[1] != '0' &&
+                           id.find_first_not_of("0123456789", 1) == std::string::npos && id.size() <= 4;
+      c.Check(subject, "robots." + std::to_string(i) + ".id", id,
+              "a replayed robot must be named r<n> (MRCLAM subject n)");
+    }
+  }
   c.Check(run.steps >= 1, "run.steps", run.steps, "must be at least 1");
   c.Check(run.dt_s > 0.0 && std::isfinite(run.dt_s), "run.dt_s", run.dt_s, "must be positive");
   c.Check(run.realtime_factor > 0.0, "run.realtime_factor", run.realtime_factor, "must be positive");
@@ -488,8 +578,22 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           f.landmark_turn_rate_prior_sd_radps, "must be positive");
   c.Check(f.confirm_sightings >= 1, "filter.confirm_sightings", f.confirm_sightings, "must be at least 1");
   c.Check(f.drop_after_misses >= 1, "filter.drop_after_misses", f.drop_after_misses, "must be at least 1");
+  c.Check(f.ela_gate_probability > 0.0 && f.ela_gate_probability < 1.0, "filter.ela_gate_probability",
+          f.ela_gate_probability, "must be in (0, 1)");
+  c.Check(f.ela_return_after_frames >= 1, "filter.ela_return_after_frames", f.ela_return_after_frames,
+          "must be at least 1");
+  c.Check(f.ela_drop_unseen_after_frames >= 1, "filter.ela_drop_unseen_after_frames",
+          f.ela_drop_unseen_after_frames, "must be at least 1");
   c.Check(f.resample_ess_fraction >= 0.0 && f.resample_ess_fraction <= 1.0, "filter.resample_ess_fraction",
           f.resample_ess_fraction, "must be in [0, 1]");
+  c.Check(f.odometry_scale > 0.0 && f.odometry_scale <= 2.0, "filter.odometry_scale", f.odometry_scale,
+          "must be in (0, 2]");
+  c.Check(f.odometry_turn_scale > 0.0 && f.odometry_turn_scale <= 2.0, "filter.odometry_turn_scale",
+          f.odometry_turn_scale, "must be in (0, 2]");
+  c.Check(f.outlier_gate_probability > 0.0 && f.outlier_gate_probability <= 1.0, "filter.outlier_gate_probability",
+          f.outlier_gate_probability, "must be in (0, 1]");
+  c.Check(f.odometry_lag_s >= 0.0 && f.odometry_lag_s <= 1.0, "filter.odometry_lag_s", f.odometry_lag_s,
+          "must be in [0, 1]");
   c.Check(rendezvous.enable_from_step >= 0, "rendezvous.enable_from_step", rendezvous.enable_from_step,
           "must not be negative");
   c.Check(rendezvous.window_steps >= 1, "rendezvous.window_steps", rendezvous.window_steps, "must be at least 1");
@@ -576,6 +680,16 @@ ScenarioOptions LoadScenario(const std::string& path, const std::vector<std::str
   }
   for (const auto& o : overrides) ApplyOverride(root, o);
   ScenarioOptions options = CreateScenarioOptions(root);
+  // A relative replay.dir from the file is relative to the file's folder; one given by an
+  // override (--set replay.dir=...) is relative to the current directory.
+  if (options.replay.enabled && !options.replay.dir.empty() && options.replay.dir[0] != '/') {
+    bool from_override = false;
+    for (const auto& o : overrides) from_override = from_override || o.rfind("replay.dir=", 0) == 0;
+    if (!from_override) {
+      const auto slash = path.find_last_of('/');
+      if (slash != std::string::npos) options.replay.dir = path.substr(0, slash + 1) + options.replay.dir;
+    }
+  }
   std::string error;
   if (!options.IsValid(&error)) throw ScenarioError(error);
   return options;

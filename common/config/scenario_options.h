@@ -156,8 +156,23 @@ struct FilterOptions {
   double landmark_turn_rate_prior_sd_radps = 0.5;
   int confirm_sightings = 2;   // tentative until seen this many times
   int drop_after_misses = 5;   // dropped when expected in view but missed this many times
+  // ekf_ela (paper B): chi-square 2 dof gate of the expected-landmark-area test; frames a moving
+  // landmark must stay within its own gate before it re-enters the map; frames a mapped landmark
+  // may be expected in view and not seen before it is deleted (paper B's Algorithm 1: 1).
+  double ela_gate_probability = 0.999;
+  int ela_return_after_frames = 5;
+  int ela_drop_unseen_after_frames = 1;
   double resample_ess_fraction = 0.5;
   bool resample_every_step = false;
+  // Odometry calibration (FastSLAM): the robot moves at odometry_scale times the commanded
+  // forward speed and odometry_turn_scale times the commanded turn rate, odometry_lag_s after
+  // the command (MRCLAM robots: about 0.92, 0.91 and 0.2 s).
+  double odometry_scale = 1.0;
+  double odometry_turn_scale = 1.0;
+  double odometry_lag_s = 0.0;
+  // FastSLAM, identified detections: beyond this chi-square 2 dof gate a reading is an outlier
+  // and ignored (1: no gate).
+  double outlier_gate_probability = 1.0;
 };
 
 struct RendezvousOptions {
@@ -182,6 +197,19 @@ struct CooperationOptions {
   double transform_gate_probability = 0.9999;
 };
 
+// Replay of a recorded data set (UTIAS MRCLAM) instead of the simulation. The robots of the
+// scenario name the replayed robots (MRCLAM subject n is robot r<n>); run.steps and run.dt_s
+// follow from the window: dt_s = step_s, steps = round(duration_s / step_s) (a given run.steps
+// may be smaller: the first steps of the window).
+struct ReplayOptions {
+  bool enabled = false;
+  std::string dir;                  // data folder; LoadScenario resolves a relative one (README)
+  double step_s = 0.1;              // one replay step
+  double start_s = 0.0;             // window start, seconds after the data set's first time stamp
+  double duration_s = 0.0;          // window length (required)
+  std::vector<std::string> robots;  // subset of the scenario's robots to replay (empty: all)
+};
+
 struct ScenarioOptions {
   std::string name;
   std::uint64_t seed = 1;
@@ -194,6 +222,7 @@ struct ScenarioOptions {
   FilterOptions filter;
   RendezvousOptions rendezvous;
   CooperationOptions cooperation;
+  ReplayOptions replay;
 
   // Range and cross-field checks; on failure *error names the key, the value and the rule.
   bool IsValid(std::string* error) const;

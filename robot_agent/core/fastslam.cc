@@ -149,9 +149,38 @@ void FastSlam<D>::MotionFromStep(const common::SensorStep& step, std::vector<Seg
     (*variance)(2) += imu_.gyro_noise_sd_radps * imu_.gyro_noise_sd_radps * dt * dt / n;
     return;
   }
+  // Calibration of the commands (filter.odometry_scale, odometry_turn_scale, odometry_lag_s):
+  // the robot moves at odometry_scale times the commanded forward speed and odometry_turn_scale
+  // times the commanded turn rate, odometry_lag_s after the command.
+  const double scale = filter_.odometry_scale;
+  const double turn_scale = filter_.odometry_turn_scale;
+  const double lag = filter_.odometry_lag_s;
   for (const auto& s : step.odometry.segments) {
-    if (std::isfinite(s.v_mps) && std::isfinite(s.w_radps) && s.dt_s > 0.0) {
-      segments->push_back({s.v_mps, s.w_radps, s.dt_s});
+    if (std::isfinite(s.v_mps) && std::isfinite(s.w_radps) && std::isfinite(s.time_s) && s.dt_s > 0.0) {
+      if (lag > 0.0) {
+        odometry_history_.push_back({s.time_s, s.dt_s, scale * s.v_mps, turn_scale * s.w_radps});
+      } else {
+        segments->push_back({scale * s.v_mps, turn_scale * s.w_radps, s.dt_s});
+      }
+    }
+  }
+  if (lag > 0.0) {
+    // The step covers [time_s - dt, time_s); its motion is the commands of [from, to) =
+    // [time_s - dt - lag, time_s - lag), zero velocity where none was issued.
+    const double to = time_s_ - lag;
+    const double from = to - step_dt_s_;
+    double cursor = from;
+    for (const auto& h : odometry_history_) {
+      const double start = std::max(h.time_s, cursor);
+      const double end = std::min(h.time_s + h.dt_s, to);
+      if (end <= start) continue;
+      if (start > cursor) segments->push_back({0.0, 0.0, start - cursor});
+      segments->push_back({h.v_mps, h.w_radps, end - start});
+      cursor = end;
+    }
+    if (to > cursor) segments->push_back({0.0, 0.0, to - cursor});
+    while (!odometry_history_.empty() && odometry_history_.front().time_s + odometry_history_.front().dt_s <= to) {
+      odometry_history_.pop_front();
     }
   }
   if (segments->empty()) segments->push_back({0.0, 0.0, step_dt_s_});
@@ -265,6 +294,17 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments,
         block.Cov(1, 1, lane);
     const Eigen::Matrix2d s = hm * p_pp * hm.transpose() + hx * sigma * hx.transpose() + r;
     const Eigen::Vector2d nu(m.nu_r, m.nu_b);
+    if (det.landmark_id >= 0 && filter_.outlier_gate_probability < 1.0) {
+      // Outlier gate for identified detections (filter.outlier_gate_probability): beyond the
+      // chi-square 2 dof gate d2_max = -2 ln(1 - p) a reading is an outlier (a wrong range):
+      // its likelihood is capped at the gate and it updates nothing.
+      const double d2_max = -2.0 * std::log(1.0 - filter_.outlier_gate_probability);
+      const double d2 = nu.dot(s.ldlt().solve(nu));
+      if (d2 > d2_max) {
+        log_weights_[p] += -0.5 * d2_max - std::log(2.0 * kPi) - 0.5 * std::log(s.determinant());
+        continue;
+      }
+    }
     log_weights_[p] += common::LogGaussian2(nu, s);
     if (kind == AssociationKind::kIgnored) continue;
     used_[slot] = 1;

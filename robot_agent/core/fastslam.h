@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -152,6 +153,8 @@ class FastSlam : public SlamFilter {
   double time_s_ = 0.0;
   double imu_v_mps_ = 0.0;  // IMU motion source: velocity integrated from accel_x
   double imu_v_var_ = 0.0;  // and its variance
+  // filter.odometry_lag_s > 0: recent odometry segments (scaled), to replay them lag_s later.
+  std::deque<common::OdometrySegment> odometry_history_;
   std::uint32_t next_track_id_ = 1;
   std::vector<std::uint32_t> creation_ids_;  // per detection of this step, 0 until used
 

@@ -290,7 +290,7 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
     if (progressed) last_progress = Clock::now();
     if (Clock::now() - last_progress > timeout) {
       throw AgentError("no complete step " + std::to_string(a.next_step) + " within " +
-                       std::to_string(a.options.timeout_s) + " s (is world_sim running on this domain?)");
+                       fmt::format("{:g}", a.options.timeout_s) + " s (is world_sim running on this domain?)");
     }
     a.notifier.Wait(&seen, milliseconds(100));
   }

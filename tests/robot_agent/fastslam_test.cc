@@ -267,10 +267,13 @@ TEST(SlamFilter, InitialPoseInOwnFrameComposesTheFrameInverse) {
   EXPECT_NEAR(back.heading, 2.09, 1e-12);
 }
 
-TEST(SlamFilter, CreatesFastSlamOnly) {
+TEST(SlamFilter, CreatesEveryKnownFilterAndNothingElse) {
   common::ScenarioOptions o = StaticScenario(10);
-  EXPECT_NE(CreateFilter(o, "r1", 1), nullptr);
-  o.filter.type = "ekf";
+  for (const char* type : {"fastslam", "ekf", "ekf_ela"}) {
+    o.filter.type = type;
+    EXPECT_NE(CreateFilter(o, "r1", 1), nullptr) << type;
+  }
+  o.filter.type = "particle_smoother";
   EXPECT_EQ(CreateFilter(o, "r1", 1), nullptr);
 }
 

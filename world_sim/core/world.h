@@ -11,6 +11,7 @@
 #include "world_sim/core/landmark_motion.h"
 #include "world_sim/core/robot_motion.h"
 #include "world_sim/core/sensors.h"
+#include "world_sim/core/step_source.h"
 
 namespace mrslam::world_sim {
 
@@ -27,17 +28,17 @@ std::vector<common::LandmarkOptions> ExpandLandmarks(const common::ScenarioOptio
 // applied during the step (plus odometry noise); the IMU the true rotation rate and body-frame
 // acceleration over the step (plus noise); the lidar every landmark and robot in range and
 // field of view at the new pose, in random order.
-class World {
+class World : public StepSource {
  public:
   explicit World(const common::ScenarioOptions& options);
 
   // Advances one step and returns each robot's samples, in scenario order.
-  std::vector<common::SensorStep> Step();
+  std::vector<common::SensorStep> Step() override;
 
-  std::uint32_t step() const { return step_; }
-  double time_s() const;
+  std::uint32_t step() const override { return step_; }
+  double time_s() const override;
   // The truth now (world frame), with every robot's frame.
-  common::GroundTruth Truth() const;
+  common::GroundTruth Truth() const override;
 
  private:
   // One robot: its options, true pose, process-noise stream (seed, "world/<id>") and sensors.

@@ -13,6 +13,7 @@
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
 #include "world_sim/core/world.h"
+#include "world_sim/replay/mrclam_replay.h"
 
 namespace mrslam::world_sim {
 
@@ -25,12 +26,22 @@ struct RobotWriters {
   std::unique_ptr<dds::Writer<msg::ImuPubSubType>> imu;
   std::unique_ptr<dds::Writer<msg::OdometryPubSubType>> odometry;
 };
+// The scenario's source: the simulated world, or a recorded data set when replay is set.
+std::unique_ptr<StepSource> MakeSource(const common::ScenarioOptions& s) {
+  if (!s.replay.enabled) return std::make_unique<World>(s);
+  auto replay = std::make_unique<MrclamReplay>(s);
+  for (const auto& problem : replay->problems()) spdlog::warn("skipped malformed row: {}", problem);
+  spdlog::info("replaying '{}' from {} s for {} steps of {} s", s.replay.dir, s.replay.start_s, s.run.steps,
+               s.replay.step_s);
+  return replay;
+}
 }  // namespace
 
 struct SimNode::Impl {
   common::ScenarioOptions scenario;
   SimNodeOptions options;
-  World world;
+  std::unique_ptr<StepSource> source;
+  StepSource& world;
   dds::Participant participant;
   std::map<std::string, RobotWriters> writers;
   std::unique_ptr<dds::Writer<msg::GroundTruthPubSubType>> truth;
@@ -38,7 +49,11 @@ struct SimNode::Impl {
   std::map<std::string, std::unique_ptr<dds::Reader<msg::StepAckPubSubType>>> acks;
 
   Impl(const common::ScenarioOptions& s, const SimNodeOptions& o)
-      : scenario(s), options(o), world(s), participant({o.domain, "world_sim", o.shared_memory}) {
+      : scenario(s),
+        options(o),
+        source(MakeSource(s)),
+        world(*source),
+        participant({o.domain, "world_sim", o.shared_memory}) {
     for (const auto& r : s.robots) {
       auto& w = writers[r.id];
       w.lidar = std::make_unique<dds::Writer<msg::LidarScanPubSubType>>(participant, dds::LidarTopic(r.id));
@@ -90,7 +105,7 @@ struct SimNode::Impl {
         }
         if (Clock::now() > deadline) {
           throw SimError("agent '" + id + "' did not acknowledge step " + std::to_string(step) + " within " +
-                         std::to_string(scenario.run.ack_timeout_s) + " s");
+                         fmt::format("{:g}", scenario.run.ack_timeout_s) + " s");
         }
       }
     }
@@ -106,7 +121,7 @@ struct SimNode::Impl {
       if (Clock::now() > deadline) {
         throw SimError("only " + std::to_string(truth->MatchedReaders()) + " of " +
                        std::to_string(options.truth_readers) + " truth readers matched within " +
-                       std::to_string(scenario.run.ack_timeout_s) + " s");
+                       fmt::format("{:g}", scenario.run.ack_timeout_s) + " s");
       }
       std::this_thread::sleep_for(milliseconds(5));
     }
@@ -179,6 +194,10 @@ bool SimNode::Run(const std::atomic<bool>& stop) {
       spdlog::info("step {}/{} ({}%)", k, steps, percent);
       last_percent = percent;
     }
+  }
+  if (const auto* replay = dynamic_cast<const MrclamReplay*>(s.source.get())) {
+    spdlog::info("replay: {} measurements published; dropped {} of unknown barcodes, {} of robots not replayed",
+                 replay->stats().measurements, replay->stats().unknown_barcodes, replay->stats().robots_not_replayed);
   }
   if (!ack_latency_ms.empty()) {
     std::sort(ack_latency_ms.begin(), ack_latency_ms.end());

@@ -1,0 +1,178 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/config/scenario_options.h"
+#include "common/sensor_types.h"
+#include "robot_agent/core/association.h"
+#include "robot_agent/core/slam_filter.h"
+
+namespace mrslam::robot_agent {
+
+// A landmark the ELA test found moving (for "landmark moved" notices to the peers).
+struct MovedLandmark {
+  std::uint32_t step = 0;
+  std::uint32_t track_id = 0;
+  int landmark_id = -1;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // where it was seen, own frame
+};
+
+// Classic EKF-SLAM (filter.type ekf) and EKF-SLAM with paper B's expected-landmark-area test
+// (filter.type ekf_ela). Owns the joint Gaussian over
+//   x = (x_R, y_R, phi_R, m_1x, m_1y, ..., m_nx, m_ny)      (static landmark model)
+// in the agent's own frame, and for ekf_ela the landmarks currently found moving (outside x).
+//
+// One step (Process):
+//  1. Prediction per odometry segment (v, w, dt), the unicycle of DESIGN.md:
+//       f(R) = (x + v dt cos(phi + w dt), y + v dt sin(phi + w dt), phi + w dt),
+//       F = df/dR, G = df/d(v, w); P_RR = F P_RR F^T + G diag(sd_v^2, sd_w^2) G^T,
+//       P_RM = F P_RM; after the last segment P_RR += diag(noise.robot_process_var).
+//  2. Association: h(R, m) = (|m - p_R|, atan2(m_y - y_R, m_x - x_R) - phi_R), innovation
+//     nu = z - h (bearing wrapped), S = H P H^T + R with H = [H_R 0 .. H_m .. 0]. Pairs with
+//     d2 = nu^T S^-1 nu <= chi2_2(gate_probability) are matched greedily by increasing d2 (each
+//     detection and each landmark at most once; reported identities decide when present). An
+//     unmatched detection beyond chi2_2(new_landmark_probability) of every landmark starts one.
+//  3. (ekf_ela) the ELA test (ela.h) over the matched landmarks; the moving ones are not used
+//     for correction.
+//  4. Update, one detection at a time, in Joseph form with the sparse H:
+//       K = P H^T S^-1,  A = (I - K H) P = P - K (H P),
+//       P = A (I - K H)^T + K R K^T = A - (A H^T) K^T + K R K^T   (O(n^2)), then symmetrized.
+//  5. New landmarks by the inverse sensor model m = g(R, z) with the full cross-covariance:
+//       P_mm = G_R P_RR G_R^T + G_z R G_z^T,  P_mX = G_R P_RX.
+//  6. Map management. ekf: a landmark expected in view (predicted inside the sensor's reach by
+//     a 3-sigma margin) but not matched drop_after_misses frames in a row is removed.
+//     ekf_ela (paper B's Algorithm 1): a moving landmark is marginalized out of x (its rows and
+//     columns removed: its old information leaves the map) and kept as a moving track at its
+//     observed position (reported with moving = tentative = true, i.e. not part of the map);
+//     an expected but unmatched landmark that a leftover detection explains by motion (within
+//     the gate after growing its covariance by (max_landmark_speed dt n)^2 per axis, n = frames
+//     since last seen, at most 2) moved too; a landmark expected in view and not seen at all is
+//     deleted after ela_drop_unseen_after_frames such frames. (Paper B's Algorithm 1 deletes the
+//     landmarks expected to be sensed only in a frame without detections; with a dense field
+//     there always are some, so the rule is applied per landmark; 1 = at once.) A moving
+//     track is re-initialized at each sighting; once its sightings have stayed within its own
+//     ELA gate of its anchor (the first of them) for ela_return_after_frames frames it
+//     re-enters x by step 5; one not seen for drop_after_misses frames is forgotten.
+//
+// Not thread-safe; pure (no DDS, no wall clock).
+class EkfSlam : public SlamFilter {
+ public:
+  EkfSlam(const common::ScenarioOptions& options, const std::string& robot_id, bool ela);
+
+  void Process(const common::SensorStep& step) override;
+  FilterEstimate Estimate() const override;
+  // Each incoming landmark is matched to the mapped ones (MatchLandmarks); a match is fused into
+  // the joint state as a position observation z = m_in, H = [0 .. I .. 0], with the gain of the
+  // rule (weighted: Kalman gain with R = C_in; covariance intersection: the Kalman gain with
+  // R = C_in / (1 - omega), omega minimizing det of the fused landmark block — the own joint
+  // covariance is not inflated by 1 / omega, which would compound over a snapshot; average:
+  // K = I / 2 on the landmark rows) in Joseph form; unmatched ones (not moving) are appended
+  // uncorrelated.
+  int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
+                     double gate_probability) override;
+
+  // Landmarks found moving since the last call (ekf_ela), for "landmark moved" notices.
+  std::vector<MovedLandmark> TakeMovedLandmarks();
+  // A peer's notice, its position moved into the own frame: the mapped landmark nearest to it
+  // within the chi-square gate (position covariance plus cov) is removed. Returns true if one was.
+  bool ApplyMovedNotice(const Eigen::Vector2d& position, const Eigen::Matrix2d& cov, double gate_probability);
+
+  // Introspection for tests.
+  int NumMapped() const { return static_cast<int>(slots_.size()); }
+  int NumMoving() const { return static_cast<int>(moving_.size()); }
+  const Eigen::VectorXd& State() const { return x_; }
+  const Eigen::MatrixXd& Covariance() const { return p_; }
+  // Counts over the run: matched observations of mapped landmarks, and those the ELA flagged.
+  std::int64_t MatchedObservations() const { return matched_observations_; }
+  std::int64_t FlaggedObservations() const { return flagged_observations_; }
+
+  // The measurement model and its Jacobians (public for tests): h(R, m) as in step 2.
+  static Eigen::Vector2d Measure(const Eigen::Vector3d& robot, const Eigen::Vector2d& m);
+  static void MeasureJacobians(const Eigen::Vector3d& robot, const Eigen::Vector2d& m, Eigen::Matrix<double, 2, 3>* h_r,
+                               Eigen::Matrix2d* h_m);
+  // One Joseph-form update of (x, p) with the measurement z of the landmark in slot (step 4);
+  // returns false when S is not positive definite.
+  static bool JosephUpdate(Eigen::VectorXd* x, Eigen::MatrixXd* p, int slot, const Eigen::Vector2d& z,
+                           const Eigen::Matrix2d& r);
+
+ private:
+  struct Slot {
+    std::uint32_t track_id = 0;
+    int landmark_id = -1;
+    std::uint32_t last_seen_step = 0;
+    int misses = 0;
+  };
+  // A landmark found moving (ekf_ela), outside the joint state.
+  struct MovingTrack {
+    std::uint32_t track_id = 0;
+    int landmark_id = -1;
+    Eigen::Vector2d position = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+    Eigen::Vector2d anchor = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d anchor_covariance = Eigen::Matrix2d::Identity();
+    int stay_frames = 0;
+    std::uint32_t last_seen_step = 0;
+  };
+  struct Detection {
+    double range_m = 0.0;
+    double bearing_rad = 0.0;
+    int landmark_id = -1;
+  };
+  // A moving track that stayed put and re-enters the map at the end of the step.
+  struct Returning {
+    Detection detection;
+    std::uint32_t track_id = 0;
+    int landmark_id = -1;
+  };
+
+  void Predict(const common::SensorStep& step);
+  // d2 and innovation covariance of detection det against slot s.
+  double AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_out = nullptr) const;
+  // Appends a landmark from detection det (step 5).
+  void AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id);
+  // Appends a landmark given as N(mean, cov), uncorrelated with x.
+  void AppendIndependent(const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov, std::uint32_t track_id,
+                         int landmark_id);
+  // Removes the slots (any order), marginalizing them out of x.
+  void RemoveSlots(std::vector<int> slots);
+  // The observed point g(R, z) and its covariance through the pose (no cross terms with m).
+  void SightPoint(const Detection& det, Eigen::Vector2d* point, Eigen::Matrix2d* cov) const;
+  bool ExpectedInView(int s) const;
+  // ekf_ela, step 6 for the detections left over after association and the moving tracks.
+  void HandleLeftovers(const std::vector<Detection>& detections, std::vector<std::uint8_t>* det_used,
+                       const std::vector<std::uint8_t>& slot_matched, std::vector<int>* removals);
+  void StartMovingTrack(const Detection& det, std::uint32_t track_id, int landmark_id);
+
+  const common::FilterOptions filter_;
+  const common::LidarOptions lidar_;
+  const common::OdometryOptions odometry_;
+  const common::NoiseOptions noise_;
+  const double step_dt_s_;
+  const bool ela_;
+  const AssociationGates gates_;
+  const double ela_gate_d2_;
+  Eigen::Matrix2d r_;  // lidar noise diag(var_r, var_b)
+
+  Eigen::VectorXd x_;
+  Eigen::MatrixXd p_;
+  std::vector<Slot> slots_;
+  std::vector<MovingTrack> moving_;
+  std::vector<MovedLandmark> moved_;
+  std::vector<Returning> returning_;
+  std::uint32_t step_ = 0;
+  double time_s_ = 0.0;
+  std::uint32_t next_track_id_ = 1;
+  std::int64_t matched_observations_ = 0;
+  std::int64_t flagged_observations_ = 0;
+};
+
+// The ekf (ela = false) or ekf_ela (ela = true) filter for robot robot_id.
+std::unique_ptr<SlamFilter> CreateEkfSlam(const common::ScenarioOptions& options, const std::string& robot_id,
+                                          bool ela);
+
+}  // namespace mrslam::robot_agent

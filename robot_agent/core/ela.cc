@@ -1,0 +1,137 @@
+#include "robot_agent/core/ela.h"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+namespace mrslam::robot_agent {
+namespace {
+
+// The inverse sensor model l = g(R, z) and its Jacobians for one observation.
+struct Sighting {
+  Eigen::Vector2d l;
+  Eigen::Matrix<double, 2, 3> g_r;  // dl / d(x_R, y_R, phi_R)
+  Eigen::Matrix2d g_z;              // dl / d(r, b)
+};
+
+Sighting Sight(const Eigen::VectorXd& x, const ElaObservation& o) {
+  const double a = x(2) + o.bearing_rad, c = std::cos(a), s = std::sin(a), r = o.range_m;
+  Sighting out;
+  out.l = Eigen::Vector2d(x(0) + r * c, x(1) + r * s);
+  out.g_r << 1.0, 0.0, -r * s, 0.0, 1.0, r * c;
+  out.g_z << c, -r * s, s, r * c;
+  return out;
+}
+
+}  // namespace
+
+ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std::vector<ElaObservation>& observations,
+                  double var_r, double var_b, double gate_d2) {
+  const int k = static_cast<int>(observations.size());
+  ElaResult result;
+  result.moving.assign(k, false);
+  result.d2.assign(k, 0.0);
+  if (k == 0) return result;
+
+  // Reduced variables y = (pose 3, m_1..m_k, z_1..z_k) and their covariance.
+  const int dim = 3 + 4 * k;
+  std::vector<int> state_index(3 + 2 * k);
+  for (int i = 0; i < 3; ++i) state_index[i] = i;
+  for (int i = 0; i < k; ++i) {
+    state_index[3 + 2 * i] = 3 + 2 * observations[i].slot;
+    state_index[4 + 2 * i] = 4 + 2 * observations[i].slot;
+  }
+  Eigen::MatrixXd cov_y = Eigen::MatrixXd::Zero(dim, dim);
+  for (int a = 0; a < 3 + 2 * k; ++a) {
+    for (int b = 0; b < 3 + 2 * k; ++b) cov_y(a, b) = p(state_index[a], state_index[b]);
+  }
+  for (int i = 0; i < k; ++i) {
+    cov_y(3 + 2 * k + 2 * i, 3 + 2 * k + 2 * i) = var_r;
+    cov_y(4 + 2 * k + 2 * i, 4 + 2 * k + 2 * i) = var_b;
+  }
+  std::vector<Sighting> sightings;
+  sightings.reserve(k);
+  for (const auto& o : observations) sightings.push_back(Sight(x, o));
+  auto map_col = [](int i) { return 3 + 2 * i; };
+  auto z_col = [k](int i) { return 3 + 2 * k + 2 * i; };
+  auto map_mean = [&](int i) -> Eigen::Vector2d { return x.segment<2>(3 + 2 * observations[i].slot); };
+
+  // The squared Mahalanobis distance of delta for observation i predicted from the pose (if
+  // with_pose) and from the landmarks in others.
+  auto statistic = [&](int i, const std::vector<int>& others, bool with_pose) -> double {
+    const int terms = (with_pose ? 1 : 0) + static_cast<int>(others.size());
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(2 * terms, dim);
+    Eigen::VectorXd d(2 * terms);
+    int t = 0;
+    if (with_pose) {
+      // d_i0 = l_i - m_i.
+      d.head<2>() = sightings[i].l - map_mean(i);
+      jac.block<2, 3>(0, 0) = sightings[i].g_r;
+      jac.block<2, 2>(0, map_col(i)) = -Eigen::Matrix2d::Identity();
+      jac.block<2, 2>(0, z_col(i)) = sightings[i].g_z;
+      t = 1;
+    }
+    // d_ij = (l_i - l_j) - (m_i - m_j).
+    for (const int j : others) {
+      d.segment<2>(2 * t) = (sightings[i].l - sightings[j].l) - (map_mean(i) - map_mean(j));
+      jac.block<2, 3>(2 * t, 0) = sightings[i].g_r - sightings[j].g_r;
+      jac.block<2, 2>(2 * t, map_col(i)) = -Eigen::Matrix2d::Identity();
+      jac.block<2, 2>(2 * t, map_col(j)) = Eigen::Matrix2d::Identity();
+      jac.block<2, 2>(2 * t, z_col(i)) = sightings[i].g_z;
+      jac.block<2, 2>(2 * t, z_col(j)) = -sightings[j].g_z;
+      ++t;
+    }
+    const Eigen::MatrixXd c = jac * cov_y * jac.transpose();
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(c);
+    if (ldlt.info() != Eigen::Success) return 0.0;
+    Eigen::MatrixXd a(2 * terms, 2);
+    for (int u = 0; u < terms; ++u) a.block<2, 2>(2 * u, 0).setIdentity();
+    const Eigen::MatrixXd c_inv_a = ldlt.solve(a);
+    const Eigen::Matrix2d lambda = a.transpose() * c_inv_a;  // information of delta
+    const Eigen::Vector2d rhs = c_inv_a.transpose() * d;     // A^T C^-1 D
+    const double d2 = rhs.dot(lambda.ldlt().solve(rhs));     // delta^T Lambda delta
+    return std::isfinite(d2) ? d2 : 0.0;
+  };
+
+  // Pairwise conflicts: d_ij alone beyond the gate.
+  Eigen::MatrixXi conflict = Eigen::MatrixXi::Zero(k, k);
+  for (int i = 0; i < k; ++i) {
+    for (int j = i + 1; j < k; ++j) {
+      conflict(i, j) = conflict(j, i) = statistic(i, {j}, /*with_pose=*/false) > gate_d2 ? 1 : 0;
+    }
+  }
+  std::vector<bool> active(k, true);
+  for (;;) {
+    // Among the observations outside their area, the one in conflict with the most others still
+    // active stops predicting (ties: the larger d2): the majority of a consistent network
+    // decides, not whichever mover happens to pull the combined area furthest.
+    int worst = -1, worst_conflicts = -1;
+    double worst_d2 = 0.0;
+    for (int i = 0; i < k; ++i) {
+      if (!active[i]) continue;
+      std::vector<int> others;
+      int conflicts = 0;
+      for (int j = 0; j < k; ++j) {
+        if (j != i && active[j]) {
+          others.push_back(j);
+          conflicts += conflict(i, j);
+        }
+      }
+      const double d2 = statistic(i, others, /*with_pose=*/true);
+      result.d2[i] = d2;
+      if (d2 <= gate_d2) continue;
+      if (conflicts > worst_conflicts || (conflicts == worst_conflicts && d2 > worst_d2)) {
+        worst = i;
+        worst_conflicts = conflicts;
+        worst_d2 = d2;
+      }
+    }
+    if (worst < 0) break;
+    result.moving[worst] = true;
+    active[worst] = false;
+  }
+  return result;
+}
+
+}  // namespace mrslam::robot_agent
