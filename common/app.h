@@ -17,7 +17,7 @@ namespace mrslam::common {
 
 struct CommonFlags {
   std::string scenario;
-  int domain = -1;  // -1: the scenario's run.domain (MRSLAM_DOMAIN overrides both)
+  int domain = -1;      // -1: the scenario's run.domain (MRSLAM_DOMAIN overrides both)
   long long seed = -1;  // -1: the scenario's seed
   std::vector<std::string> overrides;
   bool shared_memory = false;

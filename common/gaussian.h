@@ -29,8 +29,7 @@ bool IsSymmetricPositiveDefinite(const Eigen::Matrix<double, N, N>& m, double re
 
 // Squared Mahalanobis distance of innovation nu under covariance s, if s is invertible.
 template <int N>
-std::optional<double> MahalanobisSquared(const Eigen::Matrix<double, N, 1>& nu,
-                                         const Eigen::Matrix<double, N, N>& s) {
+std::optional<double> MahalanobisSquared(const Eigen::Matrix<double, N, 1>& nu, const Eigen::Matrix<double, N, N>& s) {
   const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(s);
   if (llt.info() != Eigen::Success) return std::nullopt;
   return nu.dot(llt.solve(nu));
@@ -39,9 +38,7 @@ std::optional<double> MahalanobisSquared(const Eigen::Matrix<double, N, 1>& nu,
 // Log density of N(nu; 0, s) for a 2-vector with s = [[a, b], [b, d]] (closed form, hot path).
 inline double LogGaussian2(const Eigen::Vector2d& nu, const Eigen::Matrix2d& s) {
   const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
-  const double md2 =
-      (s(1, 1) * nu.x() * nu.x() - 2.0 * s(0, 1) * nu.x() * nu.y() + s(0, 0) * nu.y() * nu.y()) /
-      det;
+  const double md2 = (s(1, 1) * nu.x() * nu.x() - 2.0 * s(0, 1) * nu.x() * nu.y() + s(0, 0) * nu.y() * nu.y()) / det;
   return -0.5 * md2 - 0.5 * std::log(det) - std::log(2.0 * 3.14159265358979323846);
 }
 

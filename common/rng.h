@@ -34,13 +34,9 @@ class Rng {
   explicit Rng(std::uint64_t seed) : engine_(seed) {}
   Rng(std::uint64_t seed, std::string_view stream) : engine_(StreamSeed(seed, stream)) {}
 
-  double Uniform(double lo = 0.0, double hi = 1.0) {
-    return std::uniform_real_distribution<double>(lo, hi)(engine_);
-  }
+  double Uniform(double lo = 0.0, double hi = 1.0) { return std::uniform_real_distribution<double>(lo, hi)(engine_); }
   int UniformInt(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(engine_); }
-  double Normal(double mean = 0.0, double sd = 1.0) {
-    return sd == 0.0 ? mean : mean + sd * normal_(engine_);
-  }
+  double Normal(double mean = 0.0, double sd = 1.0) { return sd == 0.0 ? mean : mean + sd * normal_(engine_); }
   // A sample of N(0, cov) through the Cholesky factor (cov symmetric positive semidefinite).
   template <int N>
   Eigen::Matrix<double, N, 1> Gaussian(const Eigen::Matrix<double, N, N>& cov) {

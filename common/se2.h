@@ -21,8 +21,7 @@ struct Pose2 {
 // T(A <- C) = T(A <- B) * T(B <- C).
 inline Pose2 Compose(const Pose2& a_b, const Pose2& b_c) {
   const double c = std::cos(a_b.heading), s = std::sin(a_b.heading);
-  return {a_b.x + c * b_c.x - s * b_c.y, a_b.y + s * b_c.x + c * b_c.y,
-          WrapAngle(a_b.heading + b_c.heading)};
+  return {a_b.x + c * b_c.x - s * b_c.y, a_b.y + s * b_c.x + c * b_c.y, WrapAngle(a_b.heading + b_c.heading)};
 }
 
 // T(B <- A) from T(A <- B).

@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
     if (particles >= 0) flags.overrides.push_back("filter.particles=" + std::to_string(particles));
     const auto scenario = common::LoadScenarioFromFlags(flags);
     if (scenario.RobotIndex(robot_id) < 0) {
-      throw std::runtime_error("--robot: unknown robot id '" + robot_id + "' (not in scenario '" + scenario.name + "')");
+      throw std::runtime_error("--robot: unknown robot id '" + robot_id + "' (not in scenario '" + scenario.name +
+                               "')");
     }
     auto slam = robot_agent::CreateFilter(scenario, robot_id, scenario.seed);
     if (!slam) throw std::runtime_error("filter '" + scenario.filter.type + "' is not available");

@@ -20,8 +20,7 @@ int main(int argc, char** argv) {
   app.add_option("--steps", steps, "Number of steps (overrides run.steps)");
   app.add_option("--wait-readers", truth_readers,
                  "Before step 1, wait until this many readers (the evaluator) match the truth topic");
-  app.add_option("--agents", agents,
-                 "Comma-separated agents in the lockstep barrier: 'all' (default) or 'none'");
+  app.add_option("--agents", agents, "Comma-separated agents in the lockstep barrier: 'all' (default) or 'none'");
   return common::RunMain("world_sim", app, argc, argv, [&] {
     common::SetupLogging("world_sim", flags.log_level);
     if (steps >= 0) flags.overrides.push_back("run.steps=" + std::to_string(steps));

@@ -47,8 +47,7 @@ class Section {
     const auto v = Convert<std::vector<double>>(node_[key], KeyPath(key));
     if (v.size() != 3) {
       throw ScenarioError("scenario key '" + KeyPath(key) +
-                          "' must be a list of 3 numbers [x_m, y_m, heading_rad], got " +
-                          std::to_string(v.size()));
+                          "' must be a list of 3 numbers [x_m, y_m, heading_rad], got " + std::to_string(v.size()));
     }
     return {v[0], v[1], WrapAngle(v[2])};
   }
@@ -94,17 +93,21 @@ class Section {
     } catch (const YAML::Exception&) {
       std::ostringstream value;
       value << n;
-      throw ScenarioError("scenario key '" + path + "' = '" + value.str() + "' is not " +
-                          TypeName<T>());
+      throw ScenarioError("scenario key '" + path + "' = '" + value.str() + "' is not " + TypeName<T>());
     }
   }
   template <typename T>
   static std::string TypeName() {
-    if constexpr (std::is_same_v<T, bool>) return "a boolean";
-    else if constexpr (std::is_integral_v<T>) return "an integer";
-    else if constexpr (std::is_floating_point_v<T>) return "a number";
-    else if constexpr (std::is_same_v<T, std::string>) return "a string";
-    else return "a list of numbers";
+    if constexpr (std::is_same_v<T, bool>)
+      return "a boolean";
+    else if constexpr (std::is_integral_v<T>)
+      return "an integer";
+    else if constexpr (std::is_floating_point_v<T>)
+      return "a number";
+    else if constexpr (std::is_same_v<T, std::string>)
+      return "a string";
+    else
+      return "a list of numbers";
   }
 
   YAML::Node node_;
@@ -127,12 +130,11 @@ YAML::Node RequireSequence(Section& s, const std::string& key) {
 LandmarkMotionOptions ParseLandmarkMotion(const YAML::Node& node, const std::string& path) {
   Section s(node, path);
   LandmarkMotionOptions m;
-  m.model = s.GetEnum<LandmarkMotionModel>(
-      "model", LandmarkMotionModel::kStatic,
-      {{"static", LandmarkMotionModel::kStatic},
-       {"unicycle", LandmarkMotionModel::kUnicycle},
-       {"cardinal", LandmarkMotionModel::kCardinal},
-       {"constant_velocity", LandmarkMotionModel::kConstantVelocity}});
+  m.model = s.GetEnum<LandmarkMotionModel>("model", LandmarkMotionModel::kStatic,
+                                           {{"static", LandmarkMotionModel::kStatic},
+                                            {"unicycle", LandmarkMotionModel::kUnicycle},
+                                            {"cardinal", LandmarkMotionModel::kCardinal},
+                                            {"constant_velocity", LandmarkMotionModel::kConstantVelocity}});
   m.v_mps = s.Get("v_mps", 0.0);
   m.w_radps = s.Get("w_radps", 0.0);
   m.speed_mps = s.Get("speed_mps", 0.0);
@@ -147,17 +149,15 @@ LandmarkMotionOptions ParseLandmarkMotion(const YAML::Node& node, const std::str
 ControlOptions ParseControl(const YAML::Node& node, const std::string& path) {
   Section s(node, path);
   ControlOptions c;
-  c.type = s.GetEnum<ControlType>("type", ControlType::kConstant,
-                                  {{"constant", ControlType::kConstant},
-                                   {"schedule", ControlType::kSchedule},
-                                   {"arc", ControlType::kArc}});
+  c.type = s.GetEnum<ControlType>(
+      "type", ControlType::kConstant,
+      {{"constant", ControlType::kConstant}, {"schedule", ControlType::kSchedule}, {"arc", ControlType::kArc}});
   c.v_mps = s.Get("v_mps", 0.0);
   c.w_radps = s.Get("w_radps", 0.0);
   const YAML::Node segs = RequireSequence(s, "segments");
   for (std::size_t i = 0; i < segs.size(); ++i) {
     Section seg(segs[i], s.KeyPath("segments") + "." + std::to_string(i));
-    c.segments.push_back({seg.Get("v_mps", 0.0), seg.Get("w_radps", 0.0),
-                          seg.Require<double>("duration_s")});
+    c.segments.push_back({seg.Get("v_mps", 0.0), seg.Get("w_radps", 0.0), seg.Require<double>("duration_s")});
     seg.RejectUnknownKeys();
   }
   c.radius_m = s.Get("radius_m", 1.0);
@@ -252,7 +252,8 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     lf.enabled = true;
     lf.count = f.Require<int>("count");
     const auto area = f.Get("area_m", std::vector<double>{-10, -10, 10, 10});
-    if (area.size() != 4) throw ScenarioError("scenario key 'landmark_field.area_m' must be [x_min, y_min, x_max, y_max]");
+    if (area.size() != 4)
+      throw ScenarioError("scenario key 'landmark_field.area_m' must be [x_min, y_min, x_max, y_max]");
     lf.area_m = {area[0], area[1], area[2], area[3]};
     lf.jitter_m = f.Get("jitter_m", lf.jitter_m);
     lf.moving_fraction = f.Get("moving_fraction", lf.moving_fraction);
@@ -325,21 +326,21 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     auto& d = o.filter;
     d.type = f.Get("type", d.type);
     d.particles = f.Get("particles", d.particles);
-    d.motion_source = f.GetEnum<MotionSource>(
-        "motion_source", d.motion_source, {{"odometry", MotionSource::kOdometry}, {"imu", MotionSource::kImu}});
+    d.motion_source = f.GetEnum<MotionSource>("motion_source", d.motion_source,
+                                              {{"odometry", MotionSource::kOdometry}, {"imu", MotionSource::kImu}});
     d.proposal = f.GetEnum<Proposal>("proposal", d.proposal,
                                      {{"motion", Proposal::kMotion}, {"measurement", Proposal::kMeasurement}});
-    d.association = f.GetEnum<Association>(
-        "association", d.association,
-        {{"mahalanobis", Association::kMahalanobis}, {"euclidean", Association::kEuclidean}});
+    d.association =
+        f.GetEnum<Association>("association", d.association,
+                               {{"mahalanobis", Association::kMahalanobis}, {"euclidean", Association::kEuclidean}});
     d.gate_probability = f.Get("gate_probability", d.gate_probability);
     d.new_landmark_probability = f.Get("new_landmark_probability", d.new_landmark_probability);
     d.euclidean_gate = f.Get("euclidean_gate", d.euclidean_gate);
-    d.landmark_kinematics = f.GetEnum<LandmarkKinematics>(
-        "landmark_kinematics", d.landmark_kinematics,
-        {{"static", LandmarkKinematics::kStatic},
-         {"known_candidates", LandmarkKinematics::kKnownCandidates},
-         {"constant_turn_rate", LandmarkKinematics::kConstantTurnRate}});
+    d.landmark_kinematics =
+        f.GetEnum<LandmarkKinematics>("landmark_kinematics", d.landmark_kinematics,
+                                      {{"static", LandmarkKinematics::kStatic},
+                                       {"known_candidates", LandmarkKinematics::kKnownCandidates},
+                                       {"constant_turn_rate", LandmarkKinematics::kConstantTurnRate}});
     const YAML::Node kk = RequireSequence(f, "known_kinematics");
     for (std::size_t i = 0; i < kk.size(); ++i) {
       Section k(kk[i], "filter.known_kinematics." + std::to_string(i));
@@ -347,18 +348,15 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
       k.RejectUnknownKeys();
     }
     d.max_landmark_speed_mps = f.Get("max_landmark_speed_mps", d.max_landmark_speed_mps);
-    d.landmark_speed_process_var =
-        f.Get("landmark_speed_process_var", d.landmark_speed_process_var);
-    d.landmark_turn_rate_process_var =
-        f.Get("landmark_turn_rate_process_var", d.landmark_turn_rate_process_var);
+    d.landmark_speed_process_var = f.Get("landmark_speed_process_var", d.landmark_speed_process_var);
+    d.landmark_turn_rate_process_var = f.Get("landmark_turn_rate_process_var", d.landmark_turn_rate_process_var);
     d.landmark_turn_rate_prior_sd_radps =
         f.Get("landmark_turn_rate_prior_sd_radps", d.landmark_turn_rate_prior_sd_radps);
     d.confirm_sightings = f.Get("confirm_sightings", d.confirm_sightings);
     d.drop_after_misses = f.Get("drop_after_misses", d.drop_after_misses);
     d.ela_gate_probability = f.Get("ela_gate_probability", d.ela_gate_probability);
     d.ela_return_after_frames = f.Get("ela_return_after_frames", d.ela_return_after_frames);
-    d.ela_drop_unseen_after_frames =
-        f.Get("ela_drop_unseen_after_frames", d.ela_drop_unseen_after_frames);
+    d.ela_drop_unseen_after_frames = f.Get("ela_drop_unseen_after_frames", d.ela_drop_unseen_after_frames);
     d.resample_ess_fraction = f.Get("resample_ess_fraction", d.resample_ess_fraction);
     d.resample_every_step = f.Get("resample_every_step", d.resample_every_step);
     d.odometry_scale = f.Get("odometry_scale", d.odometry_scale);
@@ -380,11 +378,10 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
   {
     Section c(top.Raw("cooperation"), "cooperation");
     auto& d = o.cooperation;
-    d.map_fusion = c.GetEnum<MapFusionRule>(
-        "map_fusion", d.map_fusion,
-        {{"covariance_intersection", MapFusionRule::kCovarianceIntersection},
-         {"weighted", MapFusionRule::kWeighted},
-         {"average", MapFusionRule::kAverage}});
+    d.map_fusion = c.GetEnum<MapFusionRule>("map_fusion", d.map_fusion,
+                                            {{"covariance_intersection", MapFusionRule::kCovarianceIntersection},
+                                             {"weighted", MapFusionRule::kWeighted},
+                                             {"average", MapFusionRule::kAverage}});
     d.merge_maps = c.Get("merge_maps", d.merge_maps);
     d.max_snapshot_landmarks = c.Get("max_snapshot_landmarks", d.max_snapshot_landmarks);
     d.cooperative_localization = c.Get("cooperative_localization", d.cooperative_localization);
@@ -477,8 +474,7 @@ bool ScenarioOptions::IsValid(std::string* error) const {
     const auto& r = robots[i];
     const std::string p = "robots." + std::to_string(i);
     c.Check(!r.id.empty(), p + ".id", "''", "must not be empty");
-    c.Check(r.id.find_first_of(" /.\t") == std::string::npos, p + ".id", r.id,
-            "must not contain spaces, '/' or '.'");
+    c.Check(r.id.find_first_of(" /.\t") == std::string::npos, p + ".id", r.id, "must not contain spaces, '/' or '.'");
     c.Check(r.id != "world", p + ".id", r.id, "'world' is reserved");
     c.Check(robot_ids.insert(r.id).second, p + ".id", r.id, "duplicate robot id");
     c.Check(Finite(r.initial_pose), p + ".pose", PoseText(r.initial_pose), "must be finite");
@@ -507,19 +503,19 @@ bool ScenarioOptions::IsValid(std::string* error) const {
     c.Check(landmark_ids.insert(l.id).second, p + ".id", l.id, "duplicate landmark id");
     c.Check(Finite(l.pose), p + ".pose", PoseText(l.pose), "must be finite");
     if (l.motion.model == LandmarkMotionModel::kCardinal) {
-      c.Check(l.motion.reverse_every_steps >= 1, p + ".motion.reverse_every_steps",
-              l.motion.reverse_every_steps, "must be at least 1");
+      c.Check(l.motion.reverse_every_steps >= 1, p + ".motion.reverse_every_steps", l.motion.reverse_every_steps,
+              "must be at least 1");
       c.Check(l.motion.speed_mps >= 0.0, p + ".motion.speed_mps", l.motion.speed_mps, "must not be negative");
     }
   }
   if (landmark_field.enabled) {
     const auto& f = landmark_field;
     c.Check(f.count >= 1, "landmark_field.count", f.count, "must be at least 1");
-    c.Check(f.area_m[2] > f.area_m[0] && f.area_m[3] > f.area_m[1], "landmark_field.area_m",
-            f.area_m.transpose(), "x_max > x_min and y_max > y_min");
+    c.Check(f.area_m[2] > f.area_m[0] && f.area_m[3] > f.area_m[1], "landmark_field.area_m", f.area_m.transpose(),
+            "x_max > x_min and y_max > y_min");
     c.Check(f.jitter_m >= 0.0, "landmark_field.jitter_m", f.jitter_m, "must not be negative");
-    c.Check(f.moving_fraction >= 0.0 && f.moving_fraction <= 1.0, "landmark_field.moving_fraction",
-            f.moving_fraction, "must be in [0, 1]");
+    c.Check(f.moving_fraction >= 0.0 && f.moving_fraction <= 1.0, "landmark_field.moving_fraction", f.moving_fraction,
+            "must be in [0, 1]");
     c.Check(f.speed_mps >= 0.0, "landmark_field.speed_mps", f.speed_mps, "must not be negative");
     c.Check(f.reverse_every_steps >= 1, "landmark_field.reverse_every_steps", f.reverse_every_steps,
             "must be at least 1");
@@ -531,25 +527,24 @@ bool ScenarioOptions::IsValid(std::string* error) const {
 
   const auto& l = sensors.lidar;
   c.Check(l.max_range_m > 0.0, "sensors.lidar.max_range_m", l.max_range_m, "must be positive");
-  c.Check(l.min_range_m >= 0.0 && l.min_range_m < l.max_range_m, "sensors.lidar.min_range_m",
-          l.min_range_m, "must be in [0, max_range_m)");
-  c.Check(l.fov_rad > 0.0 && l.fov_rad <= 2.0 * kPi + 1e-9, "sensors.lidar.fov_rad", l.fov_rad,
-          "must be in (0, 2*pi]");
+  c.Check(l.min_range_m >= 0.0 && l.min_range_m < l.max_range_m, "sensors.lidar.min_range_m", l.min_range_m,
+          "must be in [0, max_range_m)");
+  c.Check(l.fov_rad > 0.0 && l.fov_rad <= 2.0 * kPi + 1e-9, "sensors.lidar.fov_rad", l.fov_rad, "must be in (0, 2*pi]");
   c.Check(l.range_noise_sd_m >= 0.0, "sensors.lidar.range_noise_sd_m", l.range_noise_sd_m, "must not be negative");
   c.Check(l.bearing_noise_sd_rad >= 0.0, "sensors.lidar.bearing_noise_sd_rad", l.bearing_noise_sd_rad,
           "must not be negative");
-  c.Check(l.robot_detection_range_m >= 0.0, "sensors.lidar.robot_detection_range_m",
-          l.robot_detection_range_m, "must not be negative");
-  c.Check(l.detection_probability > 0.0 && l.detection_probability <= 1.0,
-          "sensors.lidar.detection_probability", l.detection_probability, "must be in (0, 1]");
+  c.Check(l.robot_detection_range_m >= 0.0, "sensors.lidar.robot_detection_range_m", l.robot_detection_range_m,
+          "must not be negative");
+  c.Check(l.detection_probability > 0.0 && l.detection_probability <= 1.0, "sensors.lidar.detection_probability",
+          l.detection_probability, "must be in (0, 1]");
   const auto& m = sensors.imu;
   c.Check(m.readings_per_step >= 1, "sensors.imu.readings_per_step", m.readings_per_step, "must be at least 1");
   c.Check(m.gyro_noise_sd_radps >= 0.0, "sensors.imu.gyro_noise_sd_radps", m.gyro_noise_sd_radps,
           "must not be negative");
   c.Check(m.accel_noise_sd_mps2 >= 0.0, "sensors.imu.accel_noise_sd_mps2", m.accel_noise_sd_mps2,
           "must not be negative");
-  c.Check(sensors.odometry.v_noise_sd_mps >= 0.0, "sensors.odometry.v_noise_sd_mps",
-          sensors.odometry.v_noise_sd_mps, "must not be negative");
+  c.Check(sensors.odometry.v_noise_sd_mps >= 0.0, "sensors.odometry.v_noise_sd_mps", sensors.odometry.v_noise_sd_mps,
+          "must not be negative");
   c.Check(sensors.odometry.w_noise_sd_radps >= 0.0, "sensors.odometry.w_noise_sd_radps",
           sensors.odometry.w_noise_sd_radps, "must not be negative");
   c.Check((noise.robot_process_var.array() >= 0.0).all(), "noise.robot_process_var",
@@ -561,8 +556,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
   c.Check(f.type == "fastslam" || f.type == "ekf" || f.type == "ekf_ela", "filter.type", f.type,
           "must be one of fastslam, ekf, ekf_ela");
   c.Check(f.particles >= 1 && f.particles <= 1000000, "filter.particles", f.particles, "must be in 1..1000000");
-  c.Check(f.gate_probability > 0.0 && f.gate_probability < 1.0, "filter.gate_probability",
-          f.gate_probability, "must be in (0, 1)");
+  c.Check(f.gate_probability > 0.0 && f.gate_probability < 1.0, "filter.gate_probability", f.gate_probability,
+          "must be in (0, 1)");
   c.Check(f.new_landmark_probability >= f.gate_probability && f.new_landmark_probability < 1.0,
           "filter.new_landmark_probability", f.new_landmark_probability, "must be in [gate_probability, 1)");
   c.Check(f.euclidean_gate > 0.0, "filter.euclidean_gate", f.euclidean_gate, "must be positive");
@@ -570,8 +565,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           "filter.known_kinematics", "[]", "needed when landmark_kinematics is known_candidates");
   c.Check(f.max_landmark_speed_mps >= 0.0, "filter.max_landmark_speed_mps", f.max_landmark_speed_mps,
           "must not be negative");
-  c.Check(f.landmark_speed_process_var >= 0.0, "filter.landmark_speed_process_var",
-          f.landmark_speed_process_var, "must not be negative");
+  c.Check(f.landmark_speed_process_var >= 0.0, "filter.landmark_speed_process_var", f.landmark_speed_process_var,
+          "must not be negative");
   c.Check(f.landmark_turn_rate_process_var >= 0.0, "filter.landmark_turn_rate_process_var",
           f.landmark_turn_rate_process_var, "must not be negative");
   c.Check(f.landmark_turn_rate_prior_sd_radps > 0.0, "filter.landmark_turn_rate_prior_sd_radps",
@@ -582,8 +577,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           f.ela_gate_probability, "must be in (0, 1)");
   c.Check(f.ela_return_after_frames >= 1, "filter.ela_return_after_frames", f.ela_return_after_frames,
           "must be at least 1");
-  c.Check(f.ela_drop_unseen_after_frames >= 1, "filter.ela_drop_unseen_after_frames",
-          f.ela_drop_unseen_after_frames, "must be at least 1");
+  c.Check(f.ela_drop_unseen_after_frames >= 1, "filter.ela_drop_unseen_after_frames", f.ela_drop_unseen_after_frames,
+          "must be at least 1");
   c.Check(f.resample_ess_fraction >= 0.0 && f.resample_ess_fraction <= 1.0, "filter.resample_ess_fraction",
           f.resample_ess_fraction, "must be in [0, 1]");
   c.Check(f.odometry_scale > 0.0 && f.odometry_scale <= 2.0, "filter.odometry_scale", f.odometry_scale,
@@ -600,10 +595,10 @@ bool ScenarioOptions::IsValid(std::string* error) const {
   c.Check(rendezvous.min_interval_steps >= 0, "rendezvous.min_interval_steps", rendezvous.min_interval_steps,
           "must not be negative");
   const auto& co = cooperation;
-  c.Check(co.max_snapshot_landmarks >= 1 && co.max_snapshot_landmarks <= 100000,
-          "cooperation.max_snapshot_landmarks", co.max_snapshot_landmarks, "must be in 1..100000");
-  c.Check(co.match_gate_probability > 0.0 && co.match_gate_probability < 1.0,
-          "cooperation.match_gate_probability", co.match_gate_probability, "must be in (0, 1)");
+  c.Check(co.max_snapshot_landmarks >= 1 && co.max_snapshot_landmarks <= 100000, "cooperation.max_snapshot_landmarks",
+          co.max_snapshot_landmarks, "must be in 1..100000");
+  c.Check(co.match_gate_probability > 0.0 && co.match_gate_probability < 1.0, "cooperation.match_gate_probability",
+          co.match_gate_probability, "must be in (0, 1)");
   c.Check(co.transform_gate_probability > 0.0 && co.transform_gate_probability < 1.0,
           "cooperation.transform_gate_probability", co.transform_gate_probability, "must be in (0, 1)");
   return c.ok();

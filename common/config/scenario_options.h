@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <yaml-cpp/yaml.h>
+#include <Eigen/Core>
 
 #include "common/se2.h"
 
@@ -37,10 +37,10 @@ enum class LandmarkMotionModel { kStatic, kUnicycle, kCardinal, kConstantVelocit
 
 struct LandmarkMotionOptions {
   LandmarkMotionModel model = LandmarkMotionModel::kStatic;
-  double v_mps = 0.0;             // unicycle
-  double w_radps = 0.0;           // unicycle
-  double speed_mps = 0.0;         // cardinal
-  int reverse_every_steps = 20;   // cardinal
+  double v_mps = 0.0;                                      // unicycle
+  double w_radps = 0.0;                                    // unicycle
+  double speed_mps = 0.0;                                  // cardinal
+  int reverse_every_steps = 20;                            // cardinal
   Eigen::Vector2d velocity_mps = Eigen::Vector2d::Zero();  // constant_velocity
 };
 
@@ -73,19 +73,19 @@ struct ControlSegment {
 
 struct ControlOptions {
   ControlType type = ControlType::kConstant;
-  double v_mps = 0.0;    // constant
-  double w_radps = 0.0;  // constant
+  double v_mps = 0.0;                    // constant
+  double w_radps = 0.0;                  // constant
   std::vector<ControlSegment> segments;  // schedule (then stands still)
-  double radius_m = 1.0;     // arc
-  double speed_mps = 0.0;    // arc
-  double sweep_rad = 0.0;    // arc (then stands still); 0 = forever
-  bool turn_left = true;     // arc
+  double radius_m = 1.0;                 // arc
+  double speed_mps = 0.0;                // arc
+  double sweep_rad = 0.0;                // arc (then stands still); 0 = forever
+  bool turn_left = true;                 // arc
 };
 
 struct RobotOptions {
   std::string id;
-  Pose2 initial_pose;     // in the world frame
-  Pose2 frame_in_world;   // pose of the robot's own frame G_i in W
+  Pose2 initial_pose;    // in the world frame
+  Pose2 frame_in_world;  // pose of the robot's own frame G_i in W
   ControlOptions control;
 };
 
@@ -143,9 +143,9 @@ struct FilterOptions {
   MotionSource motion_source = MotionSource::kOdometry;
   Proposal proposal = Proposal::kMeasurement;
   Association association = Association::kMahalanobis;
-  double gate_probability = 0.999;   // chi-square 2 dof gate
+  double gate_probability = 0.999;           // chi-square 2 dof gate
   double new_landmark_probability = 0.9999;  // beyond this gate a detection starts a landmark
-  double euclidean_gate = 0.5;       // paper A's threshold on |[dr, db]|
+  double euclidean_gate = 0.5;               // paper A's threshold on |[dr, db]|
   LandmarkKinematics landmark_kinematics = LandmarkKinematics::kConstantTurnRate;
   std::vector<KnownKinematics> known_kinematics;
   double max_landmark_speed_mps = 1.0;  // bounds the association of a second sighting
@@ -154,8 +154,8 @@ struct FilterOptions {
   double landmark_speed_process_var = 1e-4;      // (m/s)^2 per step
   double landmark_turn_rate_process_var = 1e-4;  // (rad/s)^2 per step
   double landmark_turn_rate_prior_sd_radps = 0.5;
-  int confirm_sightings = 2;   // tentative until seen this many times
-  int drop_after_misses = 5;   // dropped when expected in view but missed this many times
+  int confirm_sightings = 2;  // tentative until seen this many times
+  int drop_after_misses = 5;  // dropped when expected in view but missed this many times
   // ekf_ela (paper B): chi-square 2 dof gate of the expected-landmark-area test; frames a moving
   // landmark must stay within its own gate before it re-enters the map; frames a mapped landmark
   // may be expected in view and not seen before it is deleted (paper B's Algorithm 1: 1).
@@ -188,8 +188,8 @@ enum class MapFusionRule { kCovarianceIntersection, kWeighted, kAverage };
 // merging, cooperative localization.
 struct CooperationOptions {
   MapFusionRule map_fusion = MapFusionRule::kCovarianceIntersection;
-  bool merge_maps = true;              // send snapshots at a rendezvous and merge received ones
-  int max_snapshot_landmarks = 256;    // size bound of a snapshot; larger ones are rejected
+  bool merge_maps = true;                 // send snapshots at a rendezvous and merge received ones
+  int max_snapshot_landmarks = 256;       // size bound of a snapshot; larger ones are rejected
   bool cooperative_localization = false;  // mutual detections also correct the own pose
   double match_gate_probability = 0.999;  // chi-square 2 dof gate, peer vs own landmark
   // A mutual detection whose transform disagrees with the one held beyond this chi-square 3 dof

@@ -76,8 +76,7 @@ template <typename PubSubType>
 class Writer {
  public:
   using Msg = typename PubSubType::type;
-  Writer(Participant& participant, const std::string& topic)
-      : participant_(participant) {
+  Writer(Participant& participant, const std::string& topic) : participant_(participant) {
     auto* t = participant.GetTopic(topic, eprosima::fastdds::dds::TypeSupport(new PubSubType()));
     writer_ = participant.publisher()->create_datawriter_with_profile(t, kWriterProfile);
     if (writer_ == nullptr) throw DdsError("cannot create a writer on topic '" + topic + "'");

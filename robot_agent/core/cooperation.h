@@ -55,8 +55,8 @@ class Cooperation {
   // Everything known about one peer.
   struct PeerState {
     std::optional<TransformEstimate> transform;  // T(G_self <- G_peer)
-    bool met = false;                  // from own mutual detections (else chained)
-    std::uint32_t transform_step = 0;  // when last estimated
+    bool met = false;                            // from own mutual detections (else chained)
+    std::uint32_t transform_step = 0;            // when last estimated
     // Detections not yet paired into a mutual detection, by step (bounded by the window).
     std::map<std::uint32_t, OwnDetection> own_detections;
     std::map<std::uint32_t, RelativeMeasurement> peer_measurements;

@@ -31,8 +31,7 @@ double MaxLandmarkSpeed(const common::FilterOptions& f) {
     for (const auto& k : f.known_kinematics) s = std::max(s, std::abs(k.v_mps));
     return s;
   }
-  return f.landmark_kinematics == common::LandmarkKinematics::kStatic ? 0.0
-                                                                      : f.max_landmark_speed_mps;
+  return f.landmark_kinematics == common::LandmarkKinematics::kStatic ? 0.0 : f.max_landmark_speed_mps;
 }
 
 // Length of the chord travelled in n unicycle steps of v dt turning w dt each:
@@ -76,8 +75,7 @@ double HeadingCovOf(const LandmarkBlock<D>& b, int i, int l) {  // cov(i, headin
 }  // namespace
 
 template <int D>
-FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string& robot_id,
-                      std::uint64_t seed)
+FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string& robot_id, std::uint64_t seed)
     : filter_(options.filter),
       lidar_(options.sensors.lidar),
       imu_(options.sensors.imu),
@@ -205,8 +203,7 @@ void FastSlam<D>::Process(const common::SensorStep& step) {
     }
   }
   std::sort(detections.begin(), detections.end(), [](const Detection& a, const Detection& b) {
-    return std::tie(a.range_m, a.bearing_rad, a.landmark_id) <
-           std::tie(b.range_m, b.bearing_rad, b.landmark_id);
+    return std::tie(a.range_m, a.bearing_rad, a.landmark_id) < std::tie(b.range_m, b.bearing_rad, b.landmark_id);
   });
   for (int i = 0; i < static_cast<int>(detections.size()); ++i) detections[i].index = i;
   creation_ids_.assign(detections.size(), 0);
@@ -227,8 +224,7 @@ void FastSlam<D>::Process(const common::SensorStep& step) {
 }
 
 template <int D>
-void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments,
-                                  const Eigen::Vector3d& var, double dt,
+void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, const Eigen::Vector3d& var, double dt,
                                   const std::vector<Detection>& detections, UpdateBatch<D>* batch) {
   Particle& particle = particles_[p];
   // 1. Motion prior N(mu, Sigma).
@@ -255,13 +251,11 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments,
     AssociationKind kind = AssociationKind::kNew;
     if (det.landmark_id >= 0) {
       slot = FindIdentity(particle, det.landmark_id);
-      kind = slot < 0 ? AssociationKind::kNew
-                      : (used_[slot] ? AssociationKind::kIgnored : AssociationKind::kMatched);
+      kind = slot < 0 ? AssociationKind::kNew : (used_[slot] ? AssociationKind::kIgnored : AssociationKind::kMatched);
     } else if (count > 0) {
       for (int b = 0; b < num_blocks; ++b) {
-        GateBlock(*particle.blocks[b], std::min(kLanes, count - b * kLanes), mu, sigma, det.range_m,
-                  det.bearing_rad, var_r_, var_b_, gates_.euclidean,
-                  &d2_[static_cast<std::size_t>(b) * kLanes]);
+        GateBlock(*particle.blocks[b], std::min(kLanes, count - b * kLanes), mu, sigma, det.range_m, det.bearing_rad,
+                  var_r_, var_b_, gates_.euclidean, &d2_[static_cast<std::size_t>(b) * kLanes]);
       }
       slot = NearestUnused(d2_.data(), count, used_);
       if (slot >= 0) kind = gates_.Classify(d2_[slot]);
@@ -269,12 +263,10 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments,
     if (kind == AssociationKind::kNew) {
       // Weight: the density at the new-landmark gate under S0 = H_x Sigma H_x^T + R, with H_x
       // at the point the detection sees.
-      const Eigen::Vector2d point =
-          common::PointFromRangeBearing(mu, {det.range_m, det.bearing_rad});
+      const Eigen::Vector2d point = common::PointFromRangeBearing(mu, {det.range_m, det.bearing_rad});
       const Eigen::Matrix<double, 2, 3> hx = MeasurementJacobianPose(point, mu);
       const Eigen::Matrix2d s0 = hx * sigma * hx.transpose() + r;
-      log_weights_[p] +=
-          -0.5 * log_new_d2_ - std::log(2.0 * kPi) - 0.5 * std::log(s0.determinant());
+      log_weights_[p] += -0.5 * log_new_d2_ - std::log(2.0 * kPi) - 0.5 * std::log(s0.determinant());
       creations_.push_back(det.index);
       continue;
     }
@@ -282,16 +274,15 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments,
     const Block& block = *particle.blocks[slot / kLanes];
     const int lane = slot % kLanes;
     const Eigen::Vector2d landmark(block.Mean(0, lane), block.Mean(1, lane));
-    const RangeBearingModel<double> m = PredictMeasurement<double>(
-        landmark.x(), landmark.y(), mu.x, mu.y, mu.heading, det.range_m, det.bearing_rad);
+    const RangeBearingModel<double> m =
+        PredictMeasurement<double>(landmark.x(), landmark.y(), mu.x, mu.y, mu.heading, det.range_m, det.bearing_rad);
     Eigen::Matrix2d hm;
     hm << m.a00, m.a01, m.a10, m.a11;
     Eigen::Matrix<double, 2, 3> hx;
     hx.leftCols<2>() = -hm;
     hx.col(2) = Eigen::Vector2d(0.0, -1.0);
     Eigen::Matrix2d p_pp;
-    p_pp << block.Cov(0, 0, lane), block.Cov(0, 1, lane), block.Cov(0, 1, lane),
-        block.Cov(1, 1, lane);
+    p_pp << block.Cov(0, 0, lane), block.Cov(0, 1, lane), block.Cov(0, 1, lane), block.Cov(1, 1, lane);
     const Eigen::Matrix2d s = hm * p_pp * hm.transpose() + hx * sigma * hx.transpose() + r;
     const Eigen::Vector2d nu(m.nu_r, m.nu_b);
     if (det.landmark_id >= 0 && filter_.outlier_gate_probability < 1.0) {
@@ -430,8 +421,7 @@ void FastSlam<D>::StartFullState(Block* block, int lane, const Pose2& pose, cons
     // First sighting p1 with its covariance before the per-step inflation (c + q per axis).
     const Eigen::Vector2d p1(block->Mean(0, lane), block->Mean(1, lane));
     Eigen::Matrix2d p1_cov;
-    p1_cov << block->Cov(0, 0, lane), block->Cov(0, 1, lane), block->Cov(0, 1, lane),
-        block->Cov(1, 1, lane);
+    p1_cov << block->Cov(0, 0, lane), block->Cov(0, 1, lane), block->Cov(0, 1, lane), block->Cov(1, 1, lane);
     const Eigen::Matrix2d q_xy = Eigen::Vector2d(q_[0], q_[1]).asDiagonal();
     p1_cov -= n * (unknown_heading_inflation_ * Eigen::Matrix2d::Identity() + q_xy);
     p1_cov.diagonal() = p1_cov.diagonal().cwiseMax(1e-12);
@@ -443,8 +433,7 @@ void FastSlam<D>::StartFullState(Block* block, int lane, const Pose2& pose, cons
     const double length = std::max(delta.norm(), 1e-9);
     const Eigen::Vector2d u = delta / length;
     // heading of the chord: theta = atan2(delta), d theta / d delta = (-dy, dx) / |delta|^2.
-    const Eigen::RowVector2d j_theta =
-        Eigen::RowVector2d(-delta.y(), delta.x()) / (length * length);
+    const Eigen::RowVector2d j_theta = Eigen::RowVector2d(-delta.y(), delta.x()) / (length * length);
     double heading = std::atan2(delta.y(), delta.x());
 
     StateVector<D> mean = StateVector<D>::Zero();
@@ -477,8 +466,7 @@ void FastSlam<D>::StartFullState(Block* block, int lane, const Pose2& pose, cons
     if constexpr (D == 5) {
       // v = |delta| / (n dt); w unknown: prior N(0, sd_w^2); heading = chord + (n - 1) w dt / 2.
       const double t = n * dt;
-      const double w_var =
-          filter_.landmark_turn_rate_prior_sd_radps * filter_.landmark_turn_rate_prior_sd_radps;
+      const double w_var = filter_.landmark_turn_rate_prior_sd_radps * filter_.landmark_turn_rate_prior_sd_radps;
       const double lever = 0.5 * (n - 1) * dt;
       mean(3) = length / t;
       cov(3, 3) = u.dot(delta_cov * u) / (t * t) + q_[3];
@@ -517,8 +505,7 @@ template <int D>
 bool FastSlam<D>::InView(const Pose2& pose, double x, double y) const {
   const double dx = x - pose.x, dy = y - pose.y;
   const double r2 = dx * dx + dy * dy;
-  if (r2 > lidar_.max_range_m * lidar_.max_range_m ||
-      r2 < lidar_.min_range_m * lidar_.min_range_m) {
+  if (r2 > lidar_.max_range_m * lidar_.max_range_m || r2 < lidar_.min_range_m * lidar_.min_range_m) {
     return false;
   }
   if (lidar_.fov_rad >= 2.0 * kPi) return true;
@@ -534,8 +521,7 @@ void FastSlam<D>::CountMisses(int p) {
   while (s < particle.count) {
     const Block& view = *particle.blocks[s / kLanes];
     const int lane = s % kLanes;
-    if (view.meta[lane].last_seen_step == step_ ||
-        !InView(particle.pose, view.Mean(0, lane), view.Mean(1, lane))) {
+    if (view.meta[lane].last_seen_step == step_ || !InView(particle.pose, view.Mean(0, lane), view.Mean(1, lane))) {
       ++s;
       continue;
     }
@@ -787,8 +773,8 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
 }
 
 template <int D>
-bool FastSlam<D>::ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen::Matrix2d& covariance,
-                                    double range_m, double bearing_rad) {
+bool FastSlam<D>::ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen::Matrix2d& covariance, double range_m,
+                                    double bearing_rad) {
   if (!position.allFinite() || !covariance.allFinite() || !std::isfinite(range_m) || !std::isfinite(bearing_rad)) {
     return false;
   }
@@ -812,8 +798,8 @@ template class FastSlam<2>;
 template class FastSlam<3>;
 template class FastSlam<5>;
 
-std::unique_ptr<SlamFilter> CreateFastSlam(const common::ScenarioOptions& options,
-                                           const std::string& robot_id, std::uint64_t seed) {
+std::unique_ptr<SlamFilter> CreateFastSlam(const common::ScenarioOptions& options, const std::string& robot_id,
+                                           std::uint64_t seed) {
   switch (options.filter.landmark_kinematics) {
     case common::LandmarkKinematics::kStatic:
       return std::make_unique<FastSlam<2>>(options, robot_id, seed);

@@ -110,11 +110,10 @@ class FastSlam : public SlamFilter {
   };
 
   // Odometry or IMU -> motion segments for this step and their process noise variances.
-  void MotionFromStep(const common::SensorStep& step, std::vector<Segment>* segments,
-                      Eigen::Vector3d* variance);
+  void MotionFromStep(const common::SensorStep& step, std::vector<Segment>* segments, Eigen::Vector3d* variance);
   // Steps 1-5 for one particle; queues its landmark updates in batch.
-  void ProposeParticle(int p, const std::vector<Segment>& segments, const Eigen::Vector3d& var,
-                       double dt, const std::vector<Detection>& detections, UpdateBatch<D>* batch);
+  void ProposeParticle(int p, const std::vector<Segment>& segments, const Eigen::Vector3d& var, double dt,
+                       const std::vector<Detection>& detections, UpdateBatch<D>* batch);
   // Step 6 for one particle.
   void CountMisses(int p);
   void Resample(const std::vector<double>& weights);
@@ -140,8 +139,8 @@ class FastSlam : public SlamFilter {
   double var_r_, var_b_;
   double q_[D];                             // landmark process noise per step
   double unknown_heading_inflation_ = 0.0;  // (s_max dt)^2 / 2, for landmarks seen once
-  double log_new_d2_;     // chi2(new_landmark_probability), for the new-landmark weight
-  UpdateBatch<D> batch_;  // the landmark updates of a step, across particles
+  double log_new_d2_;                       // chi2(new_landmark_probability), for the new-landmark weight
+  UpdateBatch<D> batch_;                    // the landmark updates of a step, across particles
 
   common::Rng rng_;
   std::vector<Particle> particles_;
@@ -167,7 +166,7 @@ class FastSlam : public SlamFilter {
 
 // The FastSLAM filter for the scenario's landmark kinematics (static: D = 2, known candidates:
 // D = 3, constant turn rate: D = 5).
-std::unique_ptr<SlamFilter> CreateFastSlam(const common::ScenarioOptions& options,
-                                           const std::string& robot_id, std::uint64_t seed);
+std::unique_ptr<SlamFilter> CreateFastSlam(const common::ScenarioOptions& options, const std::string& robot_id,
+                                           std::uint64_t seed);
 
 }  // namespace mrslam::robot_agent

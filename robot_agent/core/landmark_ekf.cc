@@ -12,8 +12,7 @@ namespace {
 
 // The update kernel over n gathered updates (rows as in UpdateBatch), kW lanes at a time.
 template <typename T, int D>
-MRSLAM_LANE_INLINE void UpdateRows(double* const* in, double* const* state, int n, double var_r,
-                                   double var_b) {
+MRSLAM_LANE_INLINE void UpdateRows(double* const* in, double* const* state, int n, double var_r, double var_b) {
   constexpr int kW = sizeof(T) / sizeof(double);
   for (int k = 0; k < n; k += kW) {
     T mean[D], cov[TriangleSize(D)], pose_z[5];
@@ -33,8 +32,8 @@ void UpdateRowsSse2(double* const* in, double* const* state, int n, double var_r
 
 #if defined(__x86_64__)
 template <int D>
-__attribute__((target("avx2"))) void UpdateRowsAvx2(double* const* in, double* const* state, int n,
-                                                    double var_r, double var_b) {
+__attribute__((target("avx2"))) void UpdateRowsAvx2(double* const* in, double* const* state, int n, double var_r,
+                                                    double var_b) {
   UpdateRows<Double4, D>(in, state, n, var_r, var_b);
 }
 bool HasAvx2() {
@@ -46,8 +45,7 @@ bool HasAvx2() {
 }  // namespace
 
 template <int D>
-StateMatrix<D> MotionJacobian(const StateVector<D>& mean, double v_param, double w_param,
-                              double dt) {
+StateMatrix<D> MotionJacobian(const StateVector<D>& mean, double v_param, double w_param, double dt) {
   StateMatrix<D> f = StateMatrix<D>::Identity();
   if constexpr (D > 2) {
     const double v = D == 5 ? mean(3) : v_param;
@@ -80,8 +78,7 @@ StateVector<D> MotionMean(const StateVector<D>& mean, double v_param, double w_p
   return out;
 }
 
-Eigen::Matrix2d MeasurementJacobianLandmark(const Eigen::Vector2d& landmark,
-                                            const common::Pose2& pose) {
+Eigen::Matrix2d MeasurementJacobianLandmark(const Eigen::Vector2d& landmark, const common::Pose2& pose) {
   const RangeBearingModel<double> m =
       PredictMeasurement(landmark.x(), landmark.y(), pose.x, pose.y, pose.heading, 0.0, 0.0);
   Eigen::Matrix2d h;
@@ -89,8 +86,7 @@ Eigen::Matrix2d MeasurementJacobianLandmark(const Eigen::Vector2d& landmark,
   return h;
 }
 
-Eigen::Matrix<double, 2, 3> MeasurementJacobianPose(const Eigen::Vector2d& landmark,
-                                                    const common::Pose2& pose) {
+Eigen::Matrix<double, 2, 3> MeasurementJacobianPose(const Eigen::Vector2d& landmark, const common::Pose2& pose) {
   Eigen::Matrix<double, 2, 3> h;
   h.leftCols<2>() = -MeasurementJacobianLandmark(landmark, pose);
   h.col(2) = Eigen::Vector2d(0.0, -1.0);
@@ -131,8 +127,7 @@ namespace {
 
 // PredictBlock's kernel, kW lanes at a time.
 template <typename T, int D>
-MRSLAM_LANE_INLINE void PredictLanes(LandmarkBlock<D>* block, int count, double dt,
-                                     const double* q) {
+MRSLAM_LANE_INLINE void PredictLanes(LandmarkBlock<D>* block, int count, double dt, const double* q) {
   constexpr int kW = sizeof(T) / sizeof(double);
   constexpr int kTri = TriangleSize(D);
   for (int l = 0; l < count; l += kW) {
@@ -157,8 +152,7 @@ void PredictLanesSse2(LandmarkBlock<D>* block, int count, double dt, const doubl
 
 #if defined(__x86_64__)
 template <int D>
-__attribute__((target("avx2"))) void PredictLanesAvx2(LandmarkBlock<D>* block, int count, double dt,
-                                                      const double* q) {
+__attribute__((target("avx2"))) void PredictLanesAvx2(LandmarkBlock<D>* block, int count, double dt, const double* q) {
   PredictLanes<Double4, D>(block, count, dt, q);
 }
 #endif
@@ -183,10 +177,9 @@ namespace {
 // GateBlock's kernel, kW lanes at a time (count rounded up to kW: lanes are allocated in blocks
 // of kLanes, a multiple of 4).
 template <typename T, int D>
-MRSLAM_LANE_INLINE void GateLanes(const LandmarkBlock<D>& block, int count,
-                                  const common::Pose2& pose, const double* sigma, double z_r,
-                                  double z_b, double var_r, double var_b, bool euclidean,
-                                  double* d2) {
+MRSLAM_LANE_INLINE void GateLanes(const LandmarkBlock<D>& block, int count, const common::Pose2& pose,
+                                  const double* sigma, double z_r, double z_b, double var_r, double var_b,
+                                  bool euclidean, double* d2) {
   constexpr int kW = sizeof(T) / sizeof(double);
   const T xr = Splat<T>(pose.x), yr = Splat<T>(pose.y), phi = Splat<T>(pose.heading);
   const T zr = Splat<T>(z_r), zb = Splat<T>(z_b);
@@ -226,17 +219,15 @@ MRSLAM_LANE_INLINE void GateLanes(const LandmarkBlock<D>& block, int count,
 }
 
 template <int D>
-void GateLanesSse2(const LandmarkBlock<D>& block, int count, const common::Pose2& pose,
-                   const double* sigma, double z_r, double z_b, double var_r, double var_b,
-                   bool euclidean, double* d2) {
+void GateLanesSse2(const LandmarkBlock<D>& block, int count, const common::Pose2& pose, const double* sigma, double z_r,
+                   double z_b, double var_r, double var_b, bool euclidean, double* d2) {
   GateLanes<Double2, D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
 }
 
 #if defined(__x86_64__)
 template <int D>
-__attribute__((target("avx2"))) void GateLanesAvx2(const LandmarkBlock<D>& block, int count,
-                                                   const common::Pose2& pose, const double* sigma,
-                                                   double z_r, double z_b, double var_r,
+__attribute__((target("avx2"))) void GateLanesAvx2(const LandmarkBlock<D>& block, int count, const common::Pose2& pose,
+                                                   const double* sigma, double z_r, double z_b, double var_r,
                                                    double var_b, bool euclidean, double* d2) {
   GateLanes<Double4, D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
 }
@@ -245,9 +236,8 @@ __attribute__((target("avx2"))) void GateLanesAvx2(const LandmarkBlock<D>& block
 }  // namespace
 
 template <int D>
-void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& pose,
-               const Eigen::Matrix3d& pose_cov, double z_r, double z_b, double var_r, double var_b,
-               bool euclidean, double* d2) {
+void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& pose, const Eigen::Matrix3d& pose_cov,
+               double z_r, double z_b, double var_r, double var_b, bool euclidean, double* d2) {
   const double sigma[6] = {pose_cov(0, 0), pose_cov(0, 1), pose_cov(1, 1),
                            pose_cov(0, 2), pose_cov(1, 2), pose_cov(2, 2)};
 #if defined(__x86_64__)
@@ -299,14 +289,13 @@ void UpdateBatch<D>::Run() {
   size_ = 0;
 }
 
-#define MRSLAM_INSTANTIATE_EKF(D)                                                           \
-  template StateMatrix<D> MotionJacobian<D>(const StateVector<D>&, double, double, double); \
-  template StateVector<D> MotionMean<D>(const StateVector<D>&, double, double, double);     \
-  template struct LandmarkBlock<D>;                                                         \
-  template void PredictBlock<D>(LandmarkBlock<D>*, int, double, const double*);             \
-  template void GateBlock<D>(const LandmarkBlock<D>&, int, const common::Pose2&,            \
-                             const Eigen::Matrix3d&, double, double, double, double, bool,  \
-                             double*);                                                      \
+#define MRSLAM_INSTANTIATE_EKF(D)                                                                                \
+  template StateMatrix<D> MotionJacobian<D>(const StateVector<D>&, double, double, double);                      \
+  template StateVector<D> MotionMean<D>(const StateVector<D>&, double, double, double);                          \
+  template struct LandmarkBlock<D>;                                                                              \
+  template void PredictBlock<D>(LandmarkBlock<D>*, int, double, const double*);                                  \
+  template void GateBlock<D>(const LandmarkBlock<D>&, int, const common::Pose2&, const Eigen::Matrix3d&, double, \
+                             double, double, double, bool, double*);                                             \
   template class UpdateBatch<D>;
 MRSLAM_INSTANTIATE_EKF(2)
 MRSLAM_INSTANTIATE_EKF(3)

@@ -86,12 +86,10 @@ T Splat(double x) {
 // then atan(t) = t + t z P(z) / Q(z), z = t^2; fold back by octant and quadrant).
 template <typename T>
 MRSLAM_LANE_INLINE T Atan2(T y, T x) {
-  constexpr double kP[5] = {-8.750608600031904122785e-1, -1.615753718733365076637e1,
-                            -7.500855792314704667340e1, -1.228866684490136173410e2,
-                            -6.485021904942025371773e1};
-  constexpr double kQ[5] = {2.485846490142306297962e1, 1.650270098316988542046e2,
-                            4.328810604912902668951e2, 4.853903996359136964868e2,
-                            1.945506571482613964425e2};
+  constexpr double kP[5] = {-8.750608600031904122785e-1, -1.615753718733365076637e1, -7.500855792314704667340e1,
+                            -1.228866684490136173410e2, -6.485021904942025371773e1};
+  constexpr double kQ[5] = {2.485846490142306297962e1, 1.650270098316988542046e2, 4.328810604912902668951e2,
+                            4.853903996359136964868e2, 1.945506571482613964425e2};
   constexpr double kMoreBits = 6.123233995736765886130e-17;
   const T ax = Abs(x), ay = Abs(y);
   const T hi = Max(ax, ay), lo = Min(ax, ay);
@@ -118,9 +116,7 @@ MRSLAM_LANE_INLINE T WrapNear(T a) {
 // Number of entries in the upper triangle of a D x D covariance, and the index of (i, j) in it
 // (row-major upper triangle).
 constexpr int TriangleSize(int d) { return d * (d + 1) / 2; }
-constexpr int Tri(int i, int j, int d) {
-  return i <= j ? i * d - i * (i - 1) / 2 + (j - i) : Tri(j, i, d);
-}
+constexpr int Tri(int i, int j, int d) { return i <= j ? i * d - i * (i - 1) / 2 + (j - i) : Tri(j, i, d); }
 
 // The predicted range-bearing measurement of point (lx, ly) from pose (xr, yr, phi), its
 // innovation against (z_r, z_b) and the Jacobian H_m (a) of (r, b) with respect to the point.
@@ -130,8 +126,7 @@ struct RangeBearingModel {
   T a00, a01, a10, a11;  // H_m
 };
 template <typename T>
-MRSLAM_LANE_INLINE RangeBearingModel<T> PredictMeasurement(T lx, T ly, T xr, T yr, T phi, T z_r,
-                                                           T z_b) {
+MRSLAM_LANE_INLINE RangeBearingModel<T> PredictMeasurement(T lx, T ly, T xr, T yr, T phi, T z_r, T z_b) {
   const T dx = lx - xr, dy = ly - yr;
   const T q = Max(dx * dx + dy * dy, Splat<T>(1e-12));
   const T r = Sqrt(q);
@@ -147,8 +142,7 @@ MRSLAM_LANE_INLINE RangeBearingModel<T> PredictMeasurement(T lx, T ly, T xr, T y
 //   C = P H^T (D x 2; H = [H_m 0]), S = H_m P_pp H_m^T + R, K = C S^-1,
 //   mean += K nu,  P -= K C^T.
 template <typename T, int D>
-MRSLAM_LANE_INLINE void EkfUpdate(T* mean, T* cov, T xr, T yr, T phi, T z_r, T z_b, double var_r,
-                                  double var_b) {
+MRSLAM_LANE_INLINE void EkfUpdate(T* mean, T* cov, T xr, T yr, T phi, T z_r, T z_b, double var_r, double var_b) {
   const RangeBearingModel<T> m = PredictMeasurement(mean[0], mean[1], xr, yr, phi, z_r, z_b);
   T c0[D], c1[D];  // columns of C = P H^T
   for (int i = 0; i < D; ++i) {
@@ -168,8 +162,7 @@ MRSLAM_LANE_INLINE void EkfUpdate(T* mean, T* cov, T xr, T yr, T phi, T z_r, T z
     mean[i] = mean[i] + k0[i] * m.nu_r + k1[i] * m.nu_b;
   }
   for (int i = 0; i < D; ++i) {
-    for (int j = i; j < D; ++j)
-      cov[Tri(i, j, D)] = cov[Tri(i, j, D)] - (k0[i] * c0[j] + k1[i] * c1[j]);
+    for (int j = i; j < D; ++j) cov[Tri(i, j, D)] = cov[Tri(i, j, D)] - (k0[i] * c0[j] + k1[i] * c1[j]);
   }
 }
 
@@ -180,8 +173,7 @@ MRSLAM_LANE_INLINE void EkfUpdate(T* mean, T* cov, T xr, T yr, T phi, T z_r, T z
 //     D = 5: also E(0,3) = dt c, E(1,3) = dt s, E(0,4) = -v dt^2 s, E(1,4) = v dt^2 c, E(2,4) = dt
 //   P' = F P F^T + Q = P + G + G^T + G E^T + Q,  G = E P.
 template <typename T, int D>
-MRSLAM_LANE_INLINE void EkfPredict(T* mean, T* cov, T v_param, T w_param, double dt,
-                                   const double* q) {
+MRSLAM_LANE_INLINE void EkfPredict(T* mean, T* cov, T v_param, T w_param, double dt, const double* q) {
   if constexpr (D == 2) {
     cov[Tri(0, 0, D)] = cov[Tri(0, 0, D)] + q[0];
     cov[Tri(1, 1, D)] = cov[Tri(1, 1, D)] + q[1];
@@ -249,16 +241,13 @@ template <int D>
 using StateMatrix = Eigen::Matrix<double, D, D>;
 // F = d(motion)/d(state) at mean (see EkfPredict).
 template <int D>
-StateMatrix<D> MotionJacobian(const StateVector<D>& mean, double v_param, double w_param,
-                              double dt);
+StateMatrix<D> MotionJacobian(const StateVector<D>& mean, double v_param, double w_param, double dt);
 // The motion model's mean: f(mean).
 template <int D>
 StateVector<D> MotionMean(const StateVector<D>& mean, double v_param, double w_param, double dt);
 // H_m (2 x 2) and H_x (2 x 3) at a landmark position and a robot pose.
-Eigen::Matrix2d MeasurementJacobianLandmark(const Eigen::Vector2d& landmark,
-                                            const common::Pose2& pose);
-Eigen::Matrix<double, 2, 3> MeasurementJacobianPose(const Eigen::Vector2d& landmark,
-                                                    const common::Pose2& pose);
+Eigen::Matrix2d MeasurementJacobianLandmark(const Eigen::Vector2d& landmark, const common::Pose2& pose);
+Eigen::Matrix<double, 2, 3> MeasurementJacobianPose(const Eigen::Vector2d& landmark, const common::Pose2& pose);
 
 // Bookkeeping of one landmark slot of one particle.
 struct LandmarkMeta {
@@ -307,9 +296,8 @@ void PredictBlock(LandmarkBlock<D>* block, int count, double dt, const double* q
 //   S = H_m P_pp H_m^T + H_x Sigma H_x^T + R,  d2 = nu^T S^-1 nu.
 // With Euclidean gating it is nu_r^2 + nu_b^2 instead (paper A's eq. 14).
 template <int D>
-void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& pose,
-               const Eigen::Matrix3d& pose_cov, double z_r, double z_b, double var_r, double var_b,
-               bool euclidean, double* d2);
+void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& pose, const Eigen::Matrix3d& pose_cov,
+               double z_r, double z_b, double var_r, double var_b, bool euclidean, double* d2);
 
 // A batch of landmark EKF updates across particles: gathers each (block, lane, pose, z) into
 // contiguous arrays, runs EkfUpdate two lanes at a time, and scatters the results back. The
@@ -336,9 +324,7 @@ class UpdateBatch {
   // do not all fall into one L1 set.
   static constexpr int kRowStride = kFlushSize + 8;
   double& Input(int i, int k) { return rows_[static_cast<std::size_t>(i) * kRowStride + k]; }
-  double& State(int f, int k) {
-    return rows_[static_cast<std::size_t>(kInputs + f) * kRowStride + k];
-  }
+  double& State(int f, int k) { return rows_[static_cast<std::size_t>(kInputs + f) * kRowStride + k]; }
 
   double var_r_, var_b_;
   int size_ = 0;
@@ -347,8 +333,7 @@ class UpdateBatch {
 };
 
 template <int D>
-inline void UpdateBatch<D>::Add(LandmarkBlock<D>* block, int lane, const common::Pose2& pose,
-                                double z_r, double z_b) {
+inline void UpdateBatch<D>::Add(LandmarkBlock<D>* block, int lane, const common::Pose2& pose, double z_r, double z_b) {
   // Gather now, while the block is in cache.
   const int k = size_;
   targets_[k] = {block, lane};

@@ -27,7 +27,7 @@ struct RelativeMeasurement {
   PeerHeader header;
   bool has_range = true;
   double range_m = 0.0;
-  double bearing_rad = 0.0;  // the sender's bearing to the recipient
+  double bearing_rad = 0.0;   // the sender's bearing to the recipient
   common::Pose2 sender_pose;  // in the sender's frame
   Eigen::Matrix3d sender_covariance = Eigen::Matrix3d::Identity();
 };

@@ -16,7 +16,6 @@ int SanitizeImu(common::ImuSamples* imu);
 
 // Why a whole message is rejected before buffering: it names another robot, or a step that was
 // already processed. Empty when the stamp is acceptable.
-std::string StampProblem(const common::Stamp& stamp, const std::string& own_robot_id,
-                         std::uint32_t next_step);
+std::string StampProblem(const common::Stamp& stamp, const std::string& own_robot_id, std::uint32_t next_step);
 
 }  // namespace mrslam::robot_agent

@@ -17,8 +17,8 @@ enum class LandmarkMotionKind : std::uint8_t { kStatic = 0, kUnicycle = 1, kCons
 
 // One landmark of an agent's map, in the agent's frame.
 struct MapLandmark {
-  std::uint32_t track_id = 0;   // the filter's own identifier
-  int landmark_id = -1;         // reported identity, -1 if unknown
+  std::uint32_t track_id = 0;                      // the filter's own identifier
+  int landmark_id = -1;                            // reported identity, -1 if unknown
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();  // x_m, y_m, heading_rad
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
   double v_mps = 0.0;
@@ -54,8 +54,8 @@ class SlamFilter {
   // under the sum of their covariances within the chi-square 2 dof quantile of gate_probability;
   // reported identities decide when both carry one); matched landmarks are fused by rule
   // (map_fusion.h), unmatched ones are added. Returns how many landmarks were added.
-  virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame,
-                             common::MapFusionRule rule, double gate_probability) = 0;
+  virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
+                             double gate_probability) = 0;
 
   // Cooperative localization: at the current step this robot detected, at (range_m,
   // bearing_rad), a robot whose position in the own frame is N(position, covariance). A filter
@@ -71,7 +71,7 @@ common::Pose2 InitialPoseInOwnFrame(const common::RobotOptions& robot);
 
 // Creates the filter the scenario asks for (options.filter.type), for robot robot_id, with a
 // random stream derived from (seed, robot_id). Returns nullptr for an unknown type.
-std::unique_ptr<SlamFilter> CreateFilter(const common::ScenarioOptions& options,
-                                         const std::string& robot_id, std::uint64_t seed);
+std::unique_ptr<SlamFilter> CreateFilter(const common::ScenarioOptions& options, const std::string& robot_id,
+                                         std::uint64_t seed);
 
 }  // namespace mrslam::robot_agent

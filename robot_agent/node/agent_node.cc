@@ -23,7 +23,8 @@ using std::chrono::milliseconds;
 // Writers into one peer's inbox, created when the agent first sends to that peer.
 struct PeerWriters {
   PeerWriters(dds::Participant& p, const std::string& peer)
-      : relative(p, dds::PeerTopic(peer, "relative")), map(p, dds::PeerTopic(peer, "map")),
+      : relative(p, dds::PeerTopic(peer, "relative")),
+        map(p, dds::PeerTopic(peer, "map")),
         moved(p, dds::PeerTopic(peer, "moved")) {}
   dds::Writer<msg::RelativeMeasurementPubSubType> relative;
   dds::Writer<msg::MapSnapshotPubSubType> map;
@@ -192,7 +193,8 @@ struct AgentNode::Impl {
       ack.peer_messages_sent().push_back(pc);
     }
     ack.rejected_samples(static_cast<std::uint32_t>(counters.rejected_samples));
-    if (!ack_writer.Write(ack)) throw AgentError("DDS refused to publish the acknowledgement of step " + std::to_string(step));
+    if (!ack_writer.Write(ack))
+      throw AgentError("DDS refused to publish the acknowledgement of step " + std::to_string(step));
   }
 
   static void SortBySender(PeerInbox* in) {
@@ -282,8 +284,8 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
         // Let the evaluator and the simulator receive the final estimate and ack.
         a.estimate_writer.WaitForAcknowledgments(milliseconds(5000));
         a.ack_writer.WaitForAcknowledgments(milliseconds(5000));
-        spdlog::info("agent {} done: {} steps, {} rejected samples", a.options.robot_id,
-                     a.counters.steps_processed, a.counters.rejected_samples);
+        spdlog::info("agent {} done: {} steps, {} rejected samples", a.options.robot_id, a.counters.steps_processed,
+                     a.counters.rejected_samples);
         return true;
       }
     }

@@ -84,8 +84,7 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
   std::vector<common::Pose2> dead_reckoning;
   for (const auto& robot : options.robots) {
     filters.push_back(robot_agent::CreateFilter(options, robot.id, seed));
-    if (!filters.back())
-      throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
+    if (!filters.back()) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
     dead_reckoning.push_back(robot_agent::InitialPoseInOwnFrame(robot));
   }
   std::vector<std::vector<double>> position(n), heading(n), landmark(n), dr(n);

@@ -71,8 +71,8 @@ TEST(AgentRejectsTest, MalformedSamplesAreRejectedCountedAndTheAgentGoesOn) {
   const std::string dir = testing::MakeTempDir("mrslam-rejects");
   dds::Participant participant({kDomain, "fake_sim", false});
   FakeSimulator sim(participant);
-  ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot",
-                      "r1", "--domain", std::to_string(kDomain), "--particles", "50"},
+  ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot", "r1",
+                      "--domain", std::to_string(kDomain), "--particles", "50"},
                      dir + "/agent.log");
   ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(dir + "/agent.log");
   sim.PublishStep(1, /*nan_detection=*/true);

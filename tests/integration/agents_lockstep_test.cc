@@ -27,8 +27,8 @@ TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
   const std::string scenario_path = SourcePath("config/paper_two_robots.yaml");
   const auto scenario = common::LoadScenario(scenario_path, {});
   const std::string dir = testing::MakeTempDir("mrslam-agents");
-  const std::vector<std::string> common_args = {"--scenario", scenario_path, "--domain", std::to_string(kDomain),
-                                                "--set", "filter.particles=200"};
+  const std::vector<std::string> common_args = {
+      "--scenario", scenario_path, "--domain", std::to_string(kDomain), "--set", "filter.particles=200"};
 
   dds::Participant participant({kDomain, "agents_test", false});
   std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> readers;
@@ -67,8 +67,8 @@ TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
 
 TEST(AgentsLockstepTest, UnknownRobotIdIsAOneLineError) {
   const std::string dir = testing::MakeTempDir("mrslam-agent-bad");
-  ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot",
-                      "r9", "--domain", std::to_string(kDomain + 1)},
+  ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot", "r9",
+                      "--domain", std::to_string(kDomain + 1)},
                      dir + "/agent.log");
   const auto code = agent.WaitExit(seconds(20));
   ASSERT_TRUE(code.has_value());

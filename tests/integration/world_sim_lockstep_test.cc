@@ -90,8 +90,8 @@ TEST(WorldSimLockstepTest, EveryTopicEveryStepOnceInOrderWithCoreValues) {
   dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic);
   dds::Reader<msg::StepClockPubSubType> clock_reader(participant, dds::kClockTopic);
 
-  ChildProcess sim({BinPath("world_sim"), "--scenario", scenario_path, "--domain", std::to_string(kDomain),
-                    "--steps", std::to_string(kSteps)},
+  ChildProcess sim({BinPath("world_sim"), "--scenario", scenario_path, "--domain", std::to_string(kDomain), "--steps",
+                    std::to_string(kSteps)},
                    dir + "/world_sim.log");
   ASSERT_TRUE(sim.started());
 
@@ -108,7 +108,7 @@ TEST(WorldSimLockstepTest, EveryTopicEveryStepOnceInOrderWithCoreValues) {
   for (int k = 1; k <= kSteps; ++k) {
     msg::StepClock c;
     ASSERT_TRUE(clock_reader.Take(&c, seconds(20))) << "no clock for step " << k << "; log:\n"
-                                                   << testing::ReadFile(dir + "/world_sim.log");
+                                                    << testing::ReadFile(dir + "/world_sim.log");
     clock_steps.push_back(c.stamp().step());
     EXPECT_EQ(c.last_step(), k == kSteps);
     ack(c.stamp().step());

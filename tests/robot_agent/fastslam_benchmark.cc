@@ -33,8 +33,8 @@ void BM_LandmarkUpdates(benchmark::State& state) {
       const double r = rng.Uniform(0.5, 6.0), a = rng.Uniform(-common::kPi, common::kPi);
       StateMatrix<2> cov;
       cov << 0.02, 0.003, 0.003, 0.03;
-      blocks[p * blocks_per_particle + j / kLanes].Set(
-          j % kLanes, StateVector<2>(r * std::cos(a), r * std::sin(a)), cov);
+      blocks[p * blocks_per_particle + j / kLanes].Set(j % kLanes, StateVector<2>(r * std::cos(a), r * std::sin(a)),
+                                                       cov);
       z_r[p * m + j] = r + rng.Normal(0.0, 0.03);
       z_b[p * m + j] = common::WrapAngle(a + rng.Normal(0.0, 0.03));
     }
@@ -43,8 +43,7 @@ void BM_LandmarkUpdates(benchmark::State& state) {
   for (auto _ : state) {
     for (int p = 0; p < n; ++p) {
       for (int j = 0; j < m; ++j) {
-        batch.Add(&blocks[p * blocks_per_particle + j / kLanes], j % kLanes, poses[p],
-                  z_r[p * m + j], z_b[p * m + j]);
+        batch.Add(&blocks[p * blocks_per_particle + j / kLanes], j % kLanes, poses[p], z_r[p * m + j], z_b[p * m + j]);
       }
     }
     batch.Run();
@@ -52,9 +51,7 @@ void BM_LandmarkUpdates(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * n * m);
 }
-BENCHMARK(BM_LandmarkUpdates)
-    ->ArgsProduct({{100, 1000, 10000}, {2, 50, 500}})
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LandmarkUpdates)->ArgsProduct({{100, 1000, 10000}, {2, 50, 500}})->Unit(benchmark::kMillisecond);
 
 common::ScenarioOptions RingScenario(common::LandmarkKinematics kinematics) {
   common::ScenarioOptions o = testing::OneRobotScenario(1.0, 0.1, 1000);
@@ -97,9 +94,7 @@ void BM_FullStep(benchmark::State& state, common::LandmarkKinematics kinematics)
   state.counters["steps_per_second"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
-void BM_FullStepStatic(benchmark::State& state) {
-  BM_FullStep<2>(state, common::LandmarkKinematics::kStatic);
-}
+void BM_FullStepStatic(benchmark::State& state) { BM_FullStep<2>(state, common::LandmarkKinematics::kStatic); }
 void BM_FullStepConstantTurnRate(benchmark::State& state) {
   BM_FullStep<5>(state, common::LandmarkKinematics::kConstantTurnRate);
 }

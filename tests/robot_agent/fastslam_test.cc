@@ -20,8 +20,7 @@ using testing::TinyWorld;
 
 // Pose NEES e^T P^-1 e, e = truth - estimate (heading wrapped).
 double PoseNees(const FilterEstimate& e, const common::Pose2& truth) {
-  const Eigen::Vector3d d(truth.x - e.pose.x, truth.y - e.pose.y,
-                          common::WrapAngle(truth.heading - e.pose.heading));
+  const Eigen::Vector3d d(truth.x - e.pose.x, truth.y - e.pose.y, common::WrapAngle(truth.heading - e.pose.heading));
   return d.dot(e.covariance.ldlt().solve(d));
 }
 
@@ -39,8 +38,7 @@ common::ScenarioOptions StaticScenario(int particles) {
   o.robots[0].initial_pose = {0.0, -5.0, 0.0};
   for (int i = 0; i < 8; ++i) {
     const double a = i * common::kPi / 4.0;
-    AddLandmark(&o, i + 1,
-                {(i % 2 ? 3.0 : 7.0) * std::cos(a), (i % 2 ? 3.0 : 7.0) * std::sin(a), 0.0});
+    AddLandmark(&o, i + 1, {(i % 2 ? 3.0 : 7.0) * std::cos(a), (i % 2 ? 3.0 : 7.0) * std::sin(a), 0.0});
   }
   o.filter.landmark_kinematics = common::LandmarkKinematics::kStatic;
   return o;
@@ -113,8 +111,7 @@ TEST(FastSlam, ConstantTurnRateEstimatesSpeedAndTurnRate) {
     ASSERT_EQ(e.landmarks.size(), 3u) << "seed " << seed;
     const MapLandmark* moving = Nearest(e, world.landmarks()[0].Translation());
     // Within 4 standard deviations of the map's own uncertainty, pose error included.
-    const double sd =
-        std::sqrt(moving->covariance.topLeftCorner<2, 2>().trace() + e.covariance.trace());
+    const double sd = std::sqrt(moving->covariance.topLeftCorner<2, 2>().trace() + e.covariance.trace());
     EXPECT_LT((moving->mean.head<2>() - world.landmarks()[0].Translation()).norm(), 4.0 * sd);
     EXPECT_NEAR(moving->v_mps, kV, 0.05) << "seed " << seed;
     EXPECT_NEAR(moving->w_radps, kW, 0.03) << "seed " << seed;
@@ -202,8 +199,7 @@ TEST(FastSlam, ReportedIdentitiesAreUsed) {
 bool SameEstimate(const FilterEstimate& a, const FilterEstimate& b) {
   if (a.landmarks.size() != b.landmarks.size()) return false;
   for (std::size_t i = 0; i < a.landmarks.size(); ++i) {
-    if (a.landmarks[i].track_id != b.landmarks[i].track_id ||
-        a.landmarks[i].mean != b.landmarks[i].mean ||
+    if (a.landmarks[i].track_id != b.landmarks[i].track_id || a.landmarks[i].mean != b.landmarks[i].mean ||
         a.landmarks[i].covariance != b.landmarks[i].covariance) {
       return false;
     }

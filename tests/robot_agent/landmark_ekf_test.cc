@@ -117,8 +117,7 @@ TEST(EkfPredict, UnicycleMatchesEigenReference) { CheckPrediction<3>(); }
 TEST(EkfPredict, ConstantTurnRateMatchesEigenReference) { CheckPrediction<5>(); }
 
 common::Pose2 RandomPose(common::Rng* rng) {
-  return {rng->Uniform(-5.0, 5.0), rng->Uniform(-5.0, 5.0),
-          rng->Uniform(-common::kPi, common::kPi)};
+  return {rng->Uniform(-5.0, 5.0), rng->Uniform(-5.0, 5.0), rng->Uniform(-common::kPi, common::kPi)};
 }
 Eigen::Vector2d RandomPointAwayFrom(const common::Pose2& pose, common::Rng* rng) {
   const double r = rng->Uniform(0.3, 8.0), a = rng->Uniform(-common::kPi, common::kPi);
@@ -149,8 +148,8 @@ TEST(MeasurementJacobian, MatchesNumericDifferences) {
       Eigen::Vector3d plus = pose.Vector(), minus = pose.Vector();
       plus(j) += kH;
       minus(j) -= kH;
-      Eigen::Vector2d diff = Measure(common::Pose2::FromVector(plus), point) -
-                             Measure(common::Pose2::FromVector(minus), point);
+      Eigen::Vector2d diff =
+          Measure(common::Pose2::FromVector(plus), point) - Measure(common::Pose2::FromVector(minus), point);
       diff(1) = common::WrapAngle(diff(1));
       EXPECT_LT((diff / (2 * kH) - hx.col(j)).cwiseAbs().maxCoeff(), 1e-6) << "trial " << t;
     }
@@ -177,8 +176,7 @@ void CheckUpdate() {
       means[l] = RandomState<D>(&rng);
       means[l].template head<2>() = RandomPointAwayFrom(poses[l], &rng);
       covs[l] = RandomCovariance<D>(&rng, 0.05);
-      zs[l] = Measure(poses[l], means[l].template head<2>() +
-                                    Eigen::Vector2d(rng.Normal(0, 0.2), rng.Normal(0, 0.2)));
+      zs[l] = Measure(poses[l], means[l].template head<2>() + Eigen::Vector2d(rng.Normal(0, 0.2), rng.Normal(0, 0.2)));
       block.Set(l, means[l], covs[l]);
       batch.Add(&block, l, poses[l], zs[l](0), zs[l](1));
     }
@@ -228,8 +226,8 @@ TEST(GateBlock, MatchesEigenReference) {
       const Eigen::Vector2d point = block.MeanVector(l).head<2>();
       const Eigen::Matrix2d hm = MeasurementJacobianLandmark(point, pose);
       const Eigen::Matrix<double, 2, 3> hx = MeasurementJacobianPose(point, pose);
-      const Eigen::Matrix2d s = hm * block.CovMatrix(l).topLeftCorner<2, 2>() * hm.transpose() +
-                                hx * sigma * hx.transpose() + r;
+      const Eigen::Matrix2d s =
+          hm * block.CovMatrix(l).topLeftCorner<2, 2>() * hm.transpose() + hx * sigma * hx.transpose() + r;
       Eigen::Vector2d nu = z - Measure(pose, point);
       nu(1) = common::WrapAngle(nu(1));
       const double expected = nu.dot(s.inverse() * nu);

@@ -30,13 +30,12 @@ class TinyWorld {
     const double dt = options_.run.dt_s;
     const auto& control = options_.robots.at(0).control;
     ++step_;
-    robot_ = Noisy(common::UnicycleStep(robot_, control.v_mps, control.w_radps, dt),
-                   options_.noise.robot_process_var);
+    robot_ = Noisy(common::UnicycleStep(robot_, control.v_mps, control.w_radps, dt), options_.noise.robot_process_var);
     for (std::size_t i = 0; i < landmarks_.size(); ++i) {
       const auto& m = options_.landmarks[i].motion;
       if (m.model == common::LandmarkMotionModel::kUnicycle) {
-        landmarks_[i] = Noisy(common::UnicycleStep(landmarks_[i], m.v_mps, m.w_radps, dt),
-                              options_.noise.landmark_process_var);
+        landmarks_[i] =
+            Noisy(common::UnicycleStep(landmarks_[i], m.v_mps, m.w_radps, dt), options_.noise.landmark_process_var);
       }
     }
     common::SensorStep s;
@@ -45,14 +44,12 @@ class TinyWorld {
     s.odometry.segments.push_back({(step_ - 1) * dt, dt, control.v_mps, control.w_radps});
     const auto& lidar = options_.sensors.lidar;
     for (std::size_t i = 0; i < landmarks_.size(); ++i) {
-      const common::RangeBearing z =
-          common::MeasureRangeBearing(robot_, landmarks_[i].Translation());
+      const common::RangeBearing z = common::MeasureRangeBearing(robot_, landmarks_[i].Translation());
       if (z.range_m > lidar.max_range_m) continue;
       common::LandmarkDetection d;
       d.time_s = step_ * dt;
       d.range_m = z.range_m + rng_.Normal(0.0, lidar.range_noise_sd_m);
-      d.bearing_rad =
-          common::WrapAngle(z.bearing_rad + rng_.Normal(0.0, lidar.bearing_noise_sd_rad));
+      d.bearing_rad = common::WrapAngle(z.bearing_rad + rng_.Normal(0.0, lidar.bearing_noise_sd_rad));
       d.landmark_id = lidar.report_identity ? options_.landmarks[i].id : -1;
       s.lidar.landmarks.push_back(d);
     }
@@ -97,8 +94,8 @@ inline common::ScenarioOptions OneRobotScenario(double v_mps, double w_radps, in
   return o;
 }
 
-inline void AddLandmark(common::ScenarioOptions* o, int id, const common::Pose2& pose,
-                        double v_mps = 0.0, double w_radps = 0.0) {
+inline void AddLandmark(common::ScenarioOptions* o, int id, const common::Pose2& pose, double v_mps = 0.0,
+                        double w_radps = 0.0) {
   common::LandmarkOptions l;
   l.id = id;
   l.pose = pose;

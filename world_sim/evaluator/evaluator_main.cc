@@ -84,7 +84,8 @@ int Evaluate(const common::ScenarioOptions& scenario, int domain, bool shm, cons
     }
     if (got) last_data = Clock::now();
     if (Clock::now() - last_data > timeout) {
-      throw std::runtime_error("no data for " + fmt::format("{:g}", timeout.count()) + " s; missing " + evaluator.Missing());
+      throw std::runtime_error("no data for " + fmt::format("{:g}", timeout.count()) + " s; missing " +
+                               evaluator.Missing());
     }
     notifier.Wait(&seen, std::chrono::milliseconds(100));
   }

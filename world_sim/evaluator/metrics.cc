@@ -22,8 +22,7 @@ struct LandmarkMatch {
 };
 
 // The matching shared by LandmarkErrors and MatchedTruth (see the header for the rules).
-std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map,
-                                          const std::vector<TruePoint>& truth,
+std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
                                           const common::Pose2& frame_in_world, double cutoff_m) {
   assert(cutoff_m > 0.0);
   // p_G = T(G <- W) p_W with T(G <- W) = T(W <- G)^-1.
@@ -46,8 +45,7 @@ std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map,
   std::vector<bool> claimed(truth.size(), false);
   std::vector<size_t> free_map;
   for (size_t m = 0; m < map.size(); ++m) {
-    const auto it =
-        map[m].landmark_id >= 0 ? index_of_id.find(map[m].landmark_id) : index_of_id.end();
+    const auto it = map[m].landmark_id >= 0 ? index_of_id.find(map[m].landmark_id) : index_of_id.end();
     if (it == index_of_id.end()) {
       free_map.push_back(m);
       continue;
@@ -66,8 +64,7 @@ std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map,
   Eigen::MatrixXd cost(free_map.size(), free_truth.size());
   for (size_t r = 0; r < free_map.size(); ++r) {
     for (size_t c = 0; c < free_truth.size(); ++c) {
-      const double d_sq =
-          (map[free_map[r]].position_m - truth_in_frame[free_truth[c]]).squaredNorm();
+      const double d_sq = (map[free_map[r]].position_m - truth_in_frame[free_truth[c]]).squaredNorm();
       cost(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = std::min(d_sq, cutoff_sq);
     }
   }
@@ -82,8 +79,7 @@ std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map,
 
 }  // namespace
 
-common::Pose2 TruthInOwnFrame(const common::Pose2& truth_in_world,
-                              const common::Pose2& frame_in_world) {
+common::Pose2 TruthInOwnFrame(const common::Pose2& truth_in_world, const common::Pose2& frame_in_world) {
   return common::Compose(common::Inverse(frame_in_world), truth_in_world);
 }
 
@@ -105,8 +101,7 @@ double PoseNees(const common::Pose2& estimate, const Eigen::Matrix3d& covariance
   return llt.matrixL().solve(e).squaredNorm();
 }
 
-std::vector<double> LandmarkErrors(const std::vector<MapPoint>& map,
-                                   const std::vector<TruePoint>& truth,
+std::vector<double> LandmarkErrors(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
                                    const common::Pose2& frame_in_world, double cutoff_m) {
   const std::vector<LandmarkMatch> matches = MatchLandmarks(map, truth, frame_in_world, cutoff_m);
   std::vector<double> errors;
@@ -224,8 +219,7 @@ double Percentile(std::vector<double> values, double p) {
   return values[lo] + frac * (values[hi] - values[lo]);
 }
 
-TransformError FrameTransformError(const common::Pose2& t_i_j_estimate,
-                                   const common::Pose2& frame_i_in_world,
+TransformError FrameTransformError(const common::Pose2& t_i_j_estimate, const common::Pose2& frame_i_in_world,
                                    const common::Pose2& frame_j_in_world) {
   // T(G_i <- G_j) = T(W <- G_i)^-1 * T(W <- G_j).
   const common::Pose2 t_i_j_true = common::Between(frame_i_in_world, frame_j_in_world);

@@ -25,8 +25,7 @@ struct TruePoint {
 
 // The truth expressed in a robot's own frame G_i:
 //   T(G_i <- body) = T(W <- G_i)^-1 * T(W <- body).
-common::Pose2 TruthInOwnFrame(const common::Pose2& truth_in_world,
-                              const common::Pose2& frame_in_world);
+common::Pose2 TruthInOwnFrame(const common::Pose2& truth_in_world, const common::Pose2& frame_in_world);
 
 // Position error (m), ||t_est - t_true||, and absolute wrapped heading error (rad),
 // |wrap(phi_est - phi_true)| in [0, pi], of an estimate in G_i.
@@ -48,8 +47,7 @@ double PoseNees(const common::Pose2& estimate, const Eigen::Matrix3d& covariance
 // The assignment minimizes sum_k min(d_k^2, cutoff_m^2), the total squared distance with pairs
 // beyond the cut-off costing the same as no partner (as in OSPA), so a far ghost cannot pull a
 // true landmark away from a map landmark that is near it.
-std::vector<double> LandmarkErrors(const std::vector<MapPoint>& map,
-                                   const std::vector<TruePoint>& truth,
+std::vector<double> LandmarkErrors(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
                                    const common::Pose2& frame_in_world, double cutoff_m = 3.0);
 
 // Indices of the true landmarks (into truth) that some map landmark stands for (as matched by
@@ -77,8 +75,7 @@ struct TransformError {
 };
 // True T(G_i <- G_j) = T(W <- G_i)^-1 * T(W <- G_j); translation_m = ||t_est - t_true|| (in G_i),
 // rotation_rad = |wrap(phi_est - phi_true)|.
-TransformError FrameTransformError(const common::Pose2& t_i_j_estimate,
-                                   const common::Pose2& frame_i_in_world,
+TransformError FrameTransformError(const common::Pose2& t_i_j_estimate, const common::Pose2& frame_i_in_world,
                                    const common::Pose2& frame_j_in_world);
 
 }  // namespace mrslam::evaluator

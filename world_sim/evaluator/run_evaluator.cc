@@ -6,8 +6,8 @@
 #include <set>
 #include <stdexcept>
 
-#include <Eigen/Geometry>
 #include <fmt/format.h>
+#include <Eigen/Geometry>
 
 namespace mrslam::evaluator {
 
@@ -138,7 +138,8 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
       head_err.push_back(e_head);
       if (std::isfinite(n)) nees.push_back(n);
       if (auto o = odo.find(step); o != odo.end()) {
-        for (const auto& g : o->second.segments) dead_reckoning = UnicycleStep(dead_reckoning, g.v_mps, g.w_radps, g.dt_s);
+        for (const auto& g : o->second.segments)
+          dead_reckoning = UnicycleStep(dead_reckoning, g.v_mps, g.w_radps, g.dt_s);
         dr_err.push_back(PositionError(dead_reckoning, truth_own));
       }
       // Landmarks the robot could have sensed so far (its true pose, the lidar's reach).
@@ -159,11 +160,12 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
       mapped = est.landmarks.size();
 
       const Eigen::Vector3d sigma = est.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-      metrics << fmt::format("{},{:.3f},{},{:.5f},{:.5f},{:.5f},{:.4f},{:.5f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.2f}\n",
-                             step, est.time_s, id, est.pose.x - truth_own.x, est.pose.y - truth_own.y, e_pos,
-                             common::DegFromRad(common::WrapAngle(est.pose.heading - truth_own.heading)), sigma.x(),
-                             sigma.y(), common::DegFromRad(sigma.z()), n, Rmse(errors), est.landmarks.size(),
-                             completeness, est.effective_sample_size);
+      metrics << fmt::format(
+          "{},{:.3f},{},{:.5f},{:.5f},{:.5f},{:.4f},{:.5f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.2f}\n", step,
+          est.time_s, id, est.pose.x - truth_own.x, est.pose.y - truth_own.y, e_pos,
+          common::DegFromRad(common::WrapAngle(est.pose.heading - truth_own.heading)), sigma.x(), sigma.y(),
+          common::DegFromRad(sigma.z()), n, Rmse(errors), est.landmarks.size(), completeness,
+          est.effective_sample_size);
       tum_est << TumLine(est.time_s, est.pose);
       tum_truth << TumLine(est.time_s, truth_own);
       const Pose2 est_g1 = common::Compose(g1_from_gi, est.pose);

@@ -74,8 +74,7 @@ struct SimNode::Impl {
 
   // Waits until every agent has acknowledged `step`; collects their peer-message counts.
   // Returns false when stopped; throws SimError naming a silent agent.
-  bool WaitForAcks(std::uint32_t step, const std::atomic<bool>& stop,
-                   std::vector<msg::PeerDelivery>* deliveries) {
+  bool WaitForAcks(std::uint32_t step, const std::atomic<bool>& stop, std::vector<msg::PeerDelivery>* deliveries) {
     const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                              std::chrono::duration<double>(scenario.run.ack_timeout_s));
     for (const auto& [id, reader] : acks) {
@@ -157,8 +156,8 @@ bool SimNode::Run(const std::atomic<bool>& stop) {
   Impl& s = *impl_;
   const bool lockstep = s.scenario.run.mode == common::RunMode::kLockstep;
   const int steps = s.scenario.run.steps;
-  spdlog::info("scenario '{}', seed {}, {} steps of {} s, {} mode, agents: {}", s.scenario.name, s.scenario.seed,
-               steps, s.scenario.run.dt_s, lockstep ? "lockstep" : "realtime",
+  spdlog::info("scenario '{}', seed {}, {} steps of {} s, {} mode, agents: {}", s.scenario.name, s.scenario.seed, steps,
+               s.scenario.run.dt_s, lockstep ? "lockstep" : "realtime",
                s.options.agents.empty() ? std::string("none") : fmt::format("{}", fmt::join(s.options.agents, ", ")));
   // Step 0: every agent says it is ready (its readers exist).
   if (!s.WaitForAcks(0, stop, nullptr)) return false;
