@@ -176,16 +176,24 @@ void Cooperation::Receive(const PeerInbox& inbox, SlamFilter* filter) {
     it->second.last_snapshot_step = m.header.step;
     ApplySnapshot(m, filter);
   }
-  // 4. Landmark-moved notices: validated and counted (the ELA filter will use them).
+  // 4. Landmark-moved notices: the position moves into the own frame through the transform to
+  //    the sender, p = R(theta) p_s + t, with covariance J_T Sigma_T J_T^T (J_T = d p / d(t, theta));
+  //    the filter drops the landmark it gates to (filters that track motion ignore notices).
   for (const auto& n : inbox.moved) {
     PeerState* peer = HeaderValid(n.header) ? &peers_[n.header.sender] : nullptr;
-    if (peer == nullptr || !n.position_in_sender.allFinite() ||
+    if (peer == nullptr || !n.position_in_sender.allFinite() || !peer->transform ||
         (peer->last_notice_step && n.header.step < *peer->last_notice_step)) {
       Reject();
       continue;
     }
     peer->last_notice_step = n.header.step;
     ++moved_notices_;
+    const common::Pose2& t = peer->transform->t;
+    const Eigen::Vector2d p = common::TransformPoint(t, n.position_in_sender);
+    Eigen::Matrix<double, 2, 3> j;
+    j << 1.0, 0.0, -(p.y() - t.y), 0.0, 1.0, p.x() - t.x;
+    const Eigen::Matrix2d cov = j * peer->transform->Covariance() * j.transpose();
+    filter->ApplyMovedNotice(p, cov, scenario_.cooperation.match_gate_probability);
   }
 }
 
@@ -341,6 +349,24 @@ MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const FilterEstim
     if (t.peer != peer) m.known_transforms.push_back(t);
   }
   return m;
+}
+
+std::vector<LandmarkMovedNotice> Cooperation::MovedNotices(const std::vector<MovedLandmark>& moved, std::uint32_t step,
+                                                           double time_s) const {
+  std::vector<LandmarkMovedNotice> notices;
+  for (const auto& [id, peer] : peers_) {
+    if (!peer.transform) continue;
+    for (const auto& m : moved) {
+      if (!m.position.allFinite()) continue;
+      LandmarkMovedNotice n;
+      n.header = {robot_id_, id, step, time_s, 0};
+      n.track_id = m.track_id;
+      n.landmark_id = m.landmark_id;
+      n.position_in_sender = m.position;
+      notices.push_back(n);
+    }
+  }
+  return notices;
 }
 
 PeerOutbox Cooperation::AfterStep(const common::LidarScan& scan, const FilterEstimate& estimate) {

@@ -34,6 +34,11 @@ class Cooperation {
   // scan (from rendezvous.enable_from_step on), map snapshots to peers at a new rendezvous.
   PeerOutbox AfterStep(const common::LidarScan& scan, const FilterEstimate& estimate);
 
+  // "Landmark moved" notices for every peer whose frame is known (paper B, peer to peer instead
+  // of through a leader), for the landmarks the filter saw move during the step.
+  std::vector<LandmarkMovedNotice> MovedNotices(const std::vector<MovedLandmark>& moved, std::uint32_t step,
+                                                double time_s) const;
+
   // Every rendezvous so far (for the estimate stream and the log), and the frames known.
   const std::vector<RendezvousEvent>& rendezvous() const;
   std::vector<FrameTransform> known_transforms() const;

@@ -15,12 +15,6 @@
 namespace mrslam::robot_agent {
 
 // A landmark the ELA test found moving (for "landmark moved" notices to the peers).
-struct MovedLandmark {
-  std::uint32_t step = 0;
-  std::uint32_t track_id = 0;
-  int landmark_id = -1;
-  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // where it was seen, own frame
-};
 
 // Classic EKF-SLAM (filter.type ekf) and EKF-SLAM with paper B's expected-landmark-area test
 // (filter.type ekf_ela). Owns the joint Gaussian over
@@ -77,10 +71,10 @@ class EkfSlam : public SlamFilter {
                      double gate_probability) override;
 
   // Landmarks found moving since the last call (ekf_ela), for "landmark moved" notices.
-  std::vector<MovedLandmark> TakeMovedLandmarks();
+  std::vector<MovedLandmark> TakeMovedLandmarks() override;
   // A peer's notice, its position moved into the own frame: the mapped landmark nearest to it
   // within the chi-square gate (position covariance plus cov) is removed. Returns true if one was.
-  bool ApplyMovedNotice(const Eigen::Vector2d& position, const Eigen::Matrix2d& cov, double gate_probability);
+  bool ApplyMovedNotice(const Eigen::Vector2d& position, const Eigen::Matrix2d& cov, double gate_probability) override;
 
   // Introspection for tests.
   int NumMapped() const { return static_cast<int>(slots_.size()); }

@@ -29,6 +29,14 @@ struct MapLandmark {
   std::uint32_t last_seen_step = 0;
 };
 
+// A mapped landmark the filter saw move (paper B's ELA test), for "landmark moved" notices.
+struct MovedLandmark {
+  std::uint32_t step = 0;
+  std::uint32_t track_id = 0;
+  int landmark_id = -1;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // where it was seen, own frame
+};
+
 // What a filter reports after each step.
 struct FilterEstimate {
   std::uint32_t step = 0;
@@ -47,6 +55,17 @@ class SlamFilter {
   // Predicts with the step's odometry or IMU and corrects with its lidar scan.
   virtual void Process(const common::SensorStep& step) = 0;
   virtual FilterEstimate Estimate() const = 0;
+
+  // Landmarks seen moving since the last call (filters that detect motion: ekf_ela); a filter
+  // that tracks moving landmarks instead reports none.
+  virtual std::vector<MovedLandmark> TakeMovedLandmarks() { return {}; }
+  // A peer's "landmark moved" notice, its position already in the own frame with covariance cov:
+  // a filter that keeps only static landmarks removes the mapped landmark it gates to. Returns
+  // true if one was removed.
+  virtual bool ApplyMovedNotice(const Eigen::Vector2d& /*position*/, const Eigen::Matrix2d& /*cov*/,
+                                double /*gate_probability*/) {
+    return false;
+  }
 
   // Merges landmarks given in the agent's own frame (a peer's map after the frame transform,
   // predicted to the filter's current step). In every hypothesis (particle), each incoming

@@ -232,7 +232,9 @@ struct AgentNode::Impl {
     filter->Process(step);
     const FilterEstimate estimate = filter->Estimate();
     const std::size_t rendezvous_before = cooperation.rendezvous().size();
-    const auto sent = Send(cooperation.AfterStep(step.lidar, estimate));
+    PeerOutbox outbox = cooperation.AfterStep(step.lidar, estimate);
+    outbox.moved = cooperation.MovedNotices(filter->TakeMovedLandmarks(), k, time_s);
+    const auto sent = Send(std::move(outbox));
     for (std::size_t i = rendezvous_before; i < cooperation.rendezvous().size(); ++i) {
       const auto& e = cooperation.rendezvous()[i];
       spdlog::info("rendezvous with {} at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)", e.peer, e.step,

@@ -283,10 +283,15 @@ class FakeFilter : public SlamFilter {
     ++robot_observations;
     return true;
   }
+  bool ApplyMovedNotice(const Eigen::Vector2d& position, const Eigen::Matrix2d& cov, double) override {
+    notices.emplace_back(position, cov);
+    return true;
+  }
 
   FilterEstimate estimate;
   int merges = 0;
   int robot_observations = 0;
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Matrix2d>> notices;
 };
 
 common::ScenarioOptions Scenario(int robots) {
@@ -657,6 +662,36 @@ TEST_F(HostileInput, MovedNoticesAreValidatedAndCounted) {
   bad.position_in_sender.x() = std::nan("");
   ExpectRejected({{}, {}, {bad}});
   EXPECT_EQ(sim_.agent(0).moved_notices(), 1);
+  LandmarkMovedNotice unknown_frame = good;
+  unknown_frame.header.sender = "r3";
+  ExpectRejected({{}, {}, {unknown_frame}});
+}
+
+TEST_F(HostileInput, MovedNoticeReachesTheFilterInTheOwnFrame) {
+  const std::optional<FrameTransform> t12 = Find(sim_.agent(0).known_transforms(), "r2");
+  ASSERT_TRUE(t12.has_value());
+  LandmarkMovedNotice n;
+  n.header = {"r2", "r1", sim_.step(), 0.0, 1};
+  n.position_in_sender = {1.0, 2.0};
+  sim_.filter(0).notices.clear();
+  sim_.agent(0).Receive({{}, {}, {n}}, &sim_.filter(0));
+  ASSERT_EQ(sim_.filter(0).notices.size(), 1U);
+  const Eigen::Vector2d expected = common::TransformPoint(t12->t_self_peer, n.position_in_sender);
+  EXPECT_NEAR((sim_.filter(0).notices[0].first - expected).norm(), 0.0, 1e-12);
+  // The transform's uncertainty reaches the notice: a positive definite position covariance.
+  EXPECT_TRUE(common::IsSymmetricPositiveDefinite<2>(sim_.filter(0).notices[0].second));
+}
+
+TEST_F(HostileInput, MovedNoticesGoOnlyToPeersWhoseFrameIsKnown) {
+  MovedLandmark m;
+  m.track_id = 4;
+  m.position = {3.0, -1.0};
+  const auto notices = sim_.agent(0).MovedNotices({m}, sim_.step(), 13.0);
+  ASSERT_EQ(notices.size(), 1U);  // r2 (met); not r3 (frame unknown)
+  EXPECT_EQ(notices[0].header.recipient, "r2");
+  EXPECT_EQ(notices[0].header.sender, "r1");
+  EXPECT_EQ(notices[0].track_id, 4U);
+  EXPECT_EQ(notices[0].position_in_sender, m.position);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,80 @@
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "common/dds/msg_conversion.h"
+#include "common/dds/participant.h"
+#include "mrslamPubSubTypes.h"
+
+namespace mrslam::testing {
+
+// Stands in for world_sim towards one robot agent: publishes that robot's samples and the step
+// clock (with the peer messages the agent must wait for), and reads its acknowledgements.
+class FakeSimulator {
+ public:
+  FakeSimulator(dds::Participant& p, const std::string& robot_id, std::uint32_t total_steps, double dt_s)
+      : robot_id_(robot_id),
+        total_steps_(total_steps),
+        dt_s_(dt_s),
+        lidar_(p, dds::LidarTopic(robot_id)),
+        imu_(p, dds::ImuTopic(robot_id)),
+        odometry_(p, dds::OdometryTopic(robot_id)),
+        clock_(p, dds::kClockTopic),
+        ack_(p, dds::AckTopic(robot_id)) {}
+
+  common::Stamp StampOf(std::uint32_t k) const { return {robot_id_, k, dt_s_ * k}; }
+
+  // Publishes step k: the scan, one odometry segment (v, w) and an empty IMU message, then the
+  // clock announcing `deliveries` peer messages for this robot. False if DDS refused a sample.
+  bool PublishStep(std::uint32_t k, common::LidarScan scan, double v_mps, double w_radps,
+                   const std::vector<std::pair<std::string, std::uint32_t>>& deliveries = {}) {
+    const common::Stamp stamp = StampOf(k);
+    scan.stamp = stamp;
+    bool ok = lidar_.Write(dds::ToMsg(scan));
+    common::ImuSamples imu;
+    imu.stamp = stamp;
+    ok = imu_.Write(dds::ToMsg(imu)) && ok;
+    common::Odometry odometry;
+    odometry.stamp = stamp;
+    odometry.segments.push_back({stamp.time_s - dt_s_, dt_s_, v_mps, w_radps});
+    ok = odometry_.Write(dds::ToMsg(odometry)) && ok;
+    msg::StepClock c;
+    c.stamp(dds::ToMsg(common::Stamp{"world", k, stamp.time_s}));
+    c.total_steps(total_steps_);
+    c.last_step(k == total_steps_);
+    for (const auto& [sender, count] : deliveries) {
+      msg::PeerDelivery d;
+      d.sender_id(sender);
+      d.recipient_id(robot_id_);
+      d.count(count);
+      c.peer_deliveries().push_back(d);
+    }
+    return clock_.Write(c) && ok;
+  }
+  bool PublishLidar(const common::LidarScan& scan) { return lidar_.Write(dds::ToMsg(scan)); }
+  bool PublishOdometry(const common::Odometry& odometry) { return odometry_.Write(dds::ToMsg(odometry)); }
+
+  // Waits for the agent's acknowledgement of step k; returns its rejected-sample count (-1 on
+  // timeout).
+  int WaitAck(std::uint32_t k) {
+    msg::StepAck a;
+    while (ack_.Take(&a, std::chrono::seconds(20))) {
+      if (a.stamp().step() == k) return static_cast<int>(a.rejected_samples());
+    }
+    return -1;
+  }
+
+ private:
+  std::string robot_id_;
+  std::uint32_t total_steps_;
+  double dt_s_;
+  dds::Writer<msg::LidarScanPubSubType> lidar_;
+  dds::Writer<msg::ImuPubSubType> imu_;
+  dds::Writer<msg::OdometryPubSubType> odometry_;
+  dds::Writer<msg::StepClockPubSubType> clock_;
+  dds::Reader<msg::StepAckPubSubType> ack_;
+};
+
+}  // namespace mrslam::testing
