@@ -23,6 +23,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -189,46 +190,9 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
       << "fastslam with constant_turn_rate tracking and " << particles << " particles. ";
   std::snprintf(buf, sizeof(buf), "Wall time of the grid: %.0f s.\n\n", seconds);
   out << buf;
-  struct Metric {
-    const char* title;
-    double Row::*field;
-  };
-  const Metric metrics[] = {{"Total landmark RMSE (m), eqs. 17-18", &Row::landmark_rmse_m},
-                            {"Robot position RMSE (m), mean over robots", &Row::robot_rmse_m},
-                            {"Static-landmark completeness at the end", &Row::static_completeness}};
-  for (const auto& m : metrics) {
-    out << "## " << m.title << ": ";
-    for (std::size_t f = 0; f < filters.size(); ++f) out << (f ? " / " : "") << filters[f];
-    out << "\n\n| dynamism |";
-    for (const double s : kSpeeds) {
-      std::snprintf(buf, sizeof(buf), " %.1f m/s |", s);
-      out << buf;
-    }
-    out << "\n|---|";
-    for (std::size_t s = 0; s < kSpeeds.size(); ++s) out << "---|";
-    out << "\n";
-    for (std::size_t d = 0; d < kDynamism.size(); ++d) {
-      std::snprintf(buf, sizeof(buf), "| %.0f %% |", 100.0 * kDynamism[d]);
-      out << buf;
-      for (std::size_t s = 0; s < kSpeeds.size(); ++s) {
-        out << " ";
-        for (std::size_t f = 0; f < filters.size(); ++f) {
-          std::snprintf(buf, sizeof(buf), "%s%.2f", f ? " / " : "",
-                        mean_of(filters[f], static_cast<int>(d), static_cast<int>(s), m.field));
-          out << buf;
-        }
-        out << " |";
-      }
-      out << "\n";
-    }
-    out << "\n";
-  }
-  // Per robot (paper B's tables 2-4): robot position RMSE.
-  const std::size_t num_robots = rows.empty() ? 0 : rows[0].robot_rmse_per_robot_m.size();
-  for (std::size_t robot = 0; robot < num_robots; ++robot) {
-    out << "## Position RMSE (m) of robot " << robot + 1 << ": ";
-    for (std::size_t f = 0; f < filters.size(); ++f) out << (f ? " / " : "") << filters[f];
-    out << "\n\n| dynamism |";
+  // One markdown table in paper B's layout: rows dynamism, columns speed, cell(d, s) as text.
+  auto table = [&](const std::string& heading, const std::function<std::string(int, int)>& cell) {
+    out << "## " << heading << "\n\n| dynamism |";
     for (const double sp : kSpeeds) {
       std::snprintf(buf, sizeof(buf), " %.1f m/s |", sp);
       out << buf;
@@ -240,20 +204,44 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
       std::snprintf(buf, sizeof(buf), "| %.0f %% |", 100.0 * kDynamism[d]);
       out << buf;
       for (std::size_t sp = 0; sp < kSpeeds.size(); ++sp) {
-        out << " ";
-        for (std::size_t f = 0; f < filters.size(); ++f) {
-          std::vector<double> v;
-          for (const Row* r : cells[{filters[f], static_cast<int>(d), static_cast<int>(sp)}]) {
-            v.push_back(r->robot_rmse_per_robot_m[robot]);
-          }
-          std::snprintf(buf, sizeof(buf), "%s%.2f", f ? " / " : "", Mean(v));
-          out << buf;
-        }
-        out << " |";
+        out << " " << cell(static_cast<int>(d), static_cast<int>(sp)) << " |";
       }
       out << "\n";
     }
     out << "\n";
+  };
+  // "a / b / c" over the filters.
+  auto per_filter = [&](const std::function<double(const std::string&)>& value) {
+    std::string text;
+    for (std::size_t f = 0; f < filters.size(); ++f) {
+      std::snprintf(buf, sizeof(buf), "%s%.2f", f ? " / " : "", value(filters[f]));
+      text += buf;
+    }
+    return text;
+  };
+  std::string filter_names;
+  for (std::size_t f = 0; f < filters.size(); ++f) filter_names += (f ? " / " : "") + filters[f];
+  struct Metric {
+    const char* title;
+    double Row::*field;
+  };
+  const Metric metrics[] = {{"Total landmark RMSE (m), eqs. 17-18", &Row::landmark_rmse_m},
+                            {"Robot position RMSE (m), mean over robots", &Row::robot_rmse_m},
+                            {"Static-landmark completeness at the end", &Row::static_completeness}};
+  for (const auto& m : metrics) {
+    table(std::string(m.title) + ": " + filter_names,
+          [&](int d, int sp) { return per_filter([&](const std::string& f) { return mean_of(f, d, sp, m.field); }); });
+  }
+  // Per robot (paper B's tables 2-4): robot position RMSE.
+  const std::size_t num_robots = rows.empty() ? 0 : rows[0].robot_rmse_per_robot_m.size();
+  for (std::size_t robot = 0; robot < num_robots; ++robot) {
+    table("Position RMSE (m) of robot " + std::to_string(robot + 1) + ": " + filter_names, [&](int d, int sp) {
+      return per_filter([&](const std::string& f) {
+        std::vector<double> v;
+        for (const Row* r : cells[{f, d, sp}]) v.push_back(r->robot_rmse_per_robot_m[robot]);
+        return Mean(v);
+      });
+    });
   }
   const bool have_pair =
       std::count(filters.begin(), filters.end(), "ekf") && std::count(filters.begin(), filters.end(), "ekf_ela");
@@ -262,26 +250,10 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
   const Metric ratios[] = {{"Ratio ekf_ela / ekf, landmark RMSE", &Row::landmark_rmse_m},
                            {"Ratio ekf_ela / ekf, robot RMSE", &Row::robot_rmse_m}};
   for (const auto& m : ratios) {
-    out << "## " << m.title << "\n\n| dynamism |";
-    for (const double s : kSpeeds) {
-      std::snprintf(buf, sizeof(buf), " %.1f m/s |", s);
-      out << buf;
-    }
-    out << "\n|---|";
-    for (std::size_t s = 0; s < kSpeeds.size(); ++s) out << "---|";
-    out << "\n";
-    for (std::size_t d = 0; d < kDynamism.size(); ++d) {
-      std::snprintf(buf, sizeof(buf), "| %.0f %% |", 100.0 * kDynamism[d]);
-      out << buf;
-      for (std::size_t s = 0; s < kSpeeds.size(); ++s) {
-        const int di = static_cast<int>(d), si = static_cast<int>(s);
-        const double ratio = mean_of("ekf_ela", di, si, m.field) / mean_of("ekf", di, si, m.field);
-        std::snprintf(buf, sizeof(buf), " %.2f |", ratio);
-        out << buf;
-      }
-      out << "\n";
-    }
-    out << "\n";
+    table(m.title, [&](int d, int sp) {
+      std::snprintf(buf, sizeof(buf), "%.2f", mean_of("ekf_ela", d, sp, m.field) / mean_of("ekf", d, sp, m.field));
+      return std::string(buf);
+    });
   }
   for (std::size_t d = 0; d < kDynamism.size(); ++d) {
     for (std::size_t s = 0; s < kSpeeds.size(); ++s) {

@@ -1,4 +1,5 @@
 #include "common/config/scenario_options.h"
+#include "tests/test_paths.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -16,12 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-// The source tree: MRSLAM_SOURCE_DIR (set by the test helper for ctest), else the configure-time
-// path (test discovery and direct runs).
-std::string SourceDir() {
-  const char* env = std::getenv("MRSLAM_SOURCE_DIR");
-  return env != nullptr ? env : MRSLAM_TEST_SOURCE_DIR;
-}
+std::string SourceDir() { return mrslam::testing::SourcePath("."); }
 
 // Every *.yaml file in a folder of the source tree, sorted.
 std::vector<std::string> YamlFiles(const std::string& folder) {

@@ -13,6 +13,8 @@
 #include <thread>
 #include <vector>
 
+#include "tests/test_paths.h"
+
 extern char** environ;
 
 namespace mrslam::testing {
@@ -69,17 +71,6 @@ class ChildProcess {
   pid_t pid_ = -1;
   std::optional<int> exit_code_;
 };
-
-// Path of a built executable and of a file in the source tree (compiled in by the test
-// registration; MRSLAM_BIN_DIR / MRSLAM_SOURCE_DIR override them).
-inline std::string BinPath(const std::string& name) {
-  const char* dir = std::getenv("MRSLAM_BIN_DIR");
-  return std::string(dir != nullptr ? dir : MRSLAM_TEST_BIN_DIR) + "/" + name;
-}
-inline std::string SourcePath(const std::string& rel) {
-  const char* dir = std::getenv("MRSLAM_SOURCE_DIR");
-  return std::string(dir != nullptr ? dir : MRSLAM_TEST_SOURCE_DIR) + "/" + rel;
-}
 
 // Reads a whole text file (empty if missing).
 std::string ReadFile(const std::string& path);

@@ -19,6 +19,7 @@
 
 #include "common/config/scenario_options.h"
 #include "robot_agent/core/slam_filter.h"
+#include "tests/test_paths.h"
 #include "world_sim/replay/mrclam_reader.h"
 #include "world_sim/replay/mrclam_replay.h"
 
@@ -28,10 +29,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-std::string SourceDir() {
-  const char* env = std::getenv("MRSLAM_SOURCE_DIR");
-  return env != nullptr ? env : MRSLAM_TEST_SOURCE_DIR;
-}
+std::string SourceDir() { return mrslam::testing::SourcePath("."); }
 std::string ExcerptDir() { return SourceDir() + "/tests/world_sim/data/mrclam_excerpt"; }
 std::string Dataset6Dir() { return SourceDir() + "/../shared/data/mrclam/MRCLAM_Dataset6"; }
 

@@ -14,6 +14,7 @@
 #include "common/angles.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
+#include "tests/test_paths.h"
 #include "tests/world_sim/world_test_util.h"
 
 namespace mrslam::world_sim {
@@ -26,10 +27,7 @@ using testing::StaticLandmark;
 // Floating-point noise of a few hundred composed steps; not a statistical tolerance.
 constexpr double kExact = 1e-9;
 
-std::string SourceDir() {
-  const char* env = std::getenv("MRSLAM_SOURCE_DIR");
-  return env != nullptr ? env : MRSLAM_TEST_SOURCE_DIR;
-}
+std::string SourceDir() { return mrslam::testing::SourcePath("."); }
 
 // Circumcentre of three points.
 Eigen::Vector2d Circumcentre(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
