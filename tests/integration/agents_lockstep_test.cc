@@ -35,18 +35,12 @@ TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
   for (const auto& r : scenario.robots) {
     readers[r.id] = std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id));
   }
-  std::vector<std::unique_ptr<ChildProcess>> agents;
-  for (const auto& r : scenario.robots) {
-    auto args = common_args;
-    args.insert(args.begin(), BinPath("robot_agent"));
-    args.insert(args.end(), {"--robot", r.id});
-    agents.push_back(std::make_unique<ChildProcess>(args, dir + "/" + r.id + ".log"));
-  }
-  auto sim_args = common_args;
-  sim_args.insert(sim_args.begin(), BinPath("world_sim"));
-  ChildProcess sim(sim_args, dir + "/world_sim.log");
+  std::vector<std::string> ids;
+  for (const auto& r : scenario.robots) ids.push_back(r.id);
+  const auto agents = testing::StartAgents(ids, common_args, dir);
+  const auto sim = testing::StartBin("world_sim", common_args, dir + "/world_sim.log");
 
-  ASSERT_EQ(sim.WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(dir + "/world_sim.log");
+  ASSERT_EQ(sim->WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(dir + "/world_sim.log");
   for (std::size_t i = 0; i < agents.size(); ++i) {
     const auto& id = scenario.robots[i].id;
     EXPECT_EQ(agents[i]->WaitExit(seconds(30)), std::optional<int>(0)) << testing::ReadFile(dir + "/" + id + ".log");
@@ -70,12 +64,7 @@ TEST(AgentsLockstepTest, UnknownRobotIdIsAOneLineError) {
   ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot", "r9",
                       "--domain", std::to_string(kDomain + 1)},
                      dir + "/agent.log");
-  const auto code = agent.WaitExit(seconds(20));
-  ASSERT_TRUE(code.has_value());
-  EXPECT_EQ(*code, 1);
-  const std::string log = testing::ReadFile(dir + "/agent.log");
-  EXPECT_THAT(log, ::testing::HasSubstr("unknown robot id 'r9'"));
-  EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
+  testing::ExpectOneLineError(agent, dir + "/agent.log", "unknown robot id 'r9'");
 }
 
 }  // namespace

@@ -6,12 +6,16 @@
 #include <unistd.h>
 
 #include <fcntl.h>
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <memory>
 #include <optional>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "tests/test_paths.h"
 
@@ -74,6 +78,36 @@ class ChildProcess {
 
 // Reads a whole text file (empty if missing).
 std::string ReadFile(const std::string& path);
+
+// Starts build/bin/<executable> with args, its output in log_path.
+inline std::unique_ptr<ChildProcess> StartBin(const std::string& executable, std::vector<std::string> args,
+                                              const std::string& log_path) {
+  args.insert(args.begin(), BinPath(executable));
+  return std::make_unique<ChildProcess>(args, log_path);
+}
+
+// Starts one robot_agent per robot id with the shared args; logs in dir/<id>.log.
+inline std::vector<std::unique_ptr<ChildProcess>> StartAgents(const std::vector<std::string>& robot_ids,
+                                                              const std::vector<std::string>& args,
+                                                              const std::string& dir) {
+  std::vector<std::unique_ptr<ChildProcess>> agents;
+  for (const auto& id : robot_ids) {
+    auto agent_args = args;
+    agent_args.insert(agent_args.end(), {"--robot", id});
+    agents.push_back(StartBin("robot_agent", agent_args, dir + "/" + id + ".log"));
+  }
+  return agents;
+}
+
+// Expects the process to exit with code 1 after printing exactly one line that holds `what`.
+inline void ExpectOneLineError(ChildProcess& process, const std::string& log_path, const std::string& what) {
+  const auto code = process.WaitExit(std::chrono::seconds(20));
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 1);
+  const std::string log = ReadFile(log_path);
+  EXPECT_NE(log.find(what), std::string::npos) << log;
+  EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
+}
 
 // A fresh temporary directory for a test's logs and outputs.
 std::string MakeTempDir(const std::string& prefix);

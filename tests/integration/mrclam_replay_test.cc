@@ -56,17 +56,13 @@ TEST(MrclamReplayTest, ThreeAgentsTrackSixtySecondsOfDataset6) {
   for (const auto& r : scenario.robots) {
     readers[r.id] = std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id));
   }
-  std::vector<std::unique_ptr<ChildProcess>> agents;
-  for (const auto& r : scenario.robots) {
-    auto args = common_args;
-    args.insert(args.begin(), BinPath("robot_agent"));
-    args.insert(args.end(), {"--robot", r.id});
-    agents.push_back(std::make_unique<ChildProcess>(args, dir + "/" + r.id + ".log"));
-  }
+  std::vector<std::string> ids;
+  for (const auto& r : scenario.robots) ids.push_back(r.id);
+  const auto agents = testing::StartAgents(ids, common_args, dir);
   auto sim_args = common_args;
-  sim_args.insert(sim_args.begin(), BinPath("world_sim"));
   sim_args.insert(sim_args.end(), {"--wait-readers", "1"});
-  ChildProcess sim(sim_args, dir + "/world_sim.log");
+  const auto sim_process = testing::StartBin("world_sim", sim_args, dir + "/world_sim.log");
+  ChildProcess& sim = *sim_process;
 
   // Truth by step (the reader keeps every sample: RELIABLE KEEP_ALL).
   std::map<std::uint32_t, common::GroundTruth> truth;

@@ -181,12 +181,7 @@ TEST(WorldSimLockstepTest, BadScenarioExitsNonZeroWithOneLineReason) {
   ChildProcess sim({BinPath("world_sim"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--set",
                     "sensors.lidar.range_noise_sd_m=-1"},
                    dir + "/world_sim.log");
-  const auto code = sim.WaitExit(seconds(20));
-  ASSERT_TRUE(code.has_value());
-  EXPECT_EQ(*code, 1);
-  const std::string log = testing::ReadFile(dir + "/world_sim.log");
-  EXPECT_THAT(log, ::testing::HasSubstr("sensors.lidar.range_noise_sd_m"));
-  EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
+  testing::ExpectOneLineError(sim, dir + "/world_sim.log", "sensors.lidar.range_noise_sd_m");
 }
 
 }  // namespace
