@@ -1,5 +1,5 @@
-// mrslam_batch: the accuracy of each robot's own filter over many seeds, in-process (World and
-// one filter per robot, no DDS). For every seed it runs the scenario to its end and computes
+// mrslam_batch: the accuracy of each robot's own filter over many seeds, in-process (the World or
+// a data set's replay, and one filter per robot, no DDS). For every seed it runs the scenario to its end and computes
 // per robot (DESIGN.md's definitions, in the robot's own frame):
 //   position RMSE (m) and heading RMSE (deg) over every step,
 //   landmark RMSE (m): root of the mean over every step and every landmark in the map of the
@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -29,7 +30,7 @@
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
 #include "robot_agent/core/slam_filter.h"
-#include "world_sim/core/world.h"
+#include "world_sim/core/step_source.h"
 #include "world_sim/evaluator/metrics.h"
 
 namespace mrslam {
@@ -75,10 +76,12 @@ std::pair<std::uint64_t, std::uint64_t> ParseSeeds(const std::string& text) {
   }
 }
 
-// Runs one seed: World + one filter per robot; returns the metrics per robot (scenario order).
+// Runs one seed: the scenario's step source (the simulated World, or the replay of a recorded data
+// set) + one filter per robot; returns the metrics per robot (scenario order).
 std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t seed) {
   options.seed = seed;
-  world_sim::World world(options);
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
+  const std::vector<std::pair<std::string, common::Pose2>> frames = source->Truth().frames;
   const std::size_t n = options.robots.size();
   std::vector<std::unique_ptr<robot_agent::SlamFilter>> filters;
   std::vector<common::Pose2> dead_reckoning;
@@ -89,14 +92,14 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
   }
   std::vector<std::vector<double>> position(n), heading(n), landmark(n), dr(n);
   for (int k = 0; k < options.run.steps; ++k) {
-    const std::vector<common::SensorStep> steps = world.Step();
-    const common::GroundTruth truth = world.Truth();
+    const std::vector<common::SensorStep> steps = source->Step();
+    const common::GroundTruth truth = source->Truth();
     std::vector<evaluator::TruePoint> true_landmarks;
     for (const auto& l : truth.landmarks) {
       true_landmarks.push_back({l.pose.Translation(), std::stoi(l.id)});
     }
     for (std::size_t i = 0; i < n; ++i) {
-      const common::Pose2& frame = options.robots[i].frame_in_world;
+      const common::Pose2& frame = frames[i].second;
       const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
       filters[i]->Process(steps[i]);
       const robot_agent::FilterEstimate e = filters[i]->Estimate();

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "common/config/scenario_options.h"
 #include "robot_agent/core/slam_filter.h"
 #include "tests/test_paths.h"
+#include "world_sim/core/step_source.h"
 #include "world_sim/replay/mrclam_reader.h"
 #include "world_sim/replay/mrclam_replay.h"
 
@@ -257,6 +259,19 @@ TEST(MrclamReplayTest, WindowAndSubsetOfTheExcerpt) {
   EXPECT_EQ(landmarks + replay.stats().robots_not_replayed + replay.stats().unknown_barcodes, 58);
   EXPECT_EQ(replay.stats().robots_not_replayed, 20);  // of r2..r5
   EXPECT_NEAR(replay.time_s(), 20.0, 1e-9);
+}
+
+TEST(MrclamReplayTest, StepSourceIsTheReplayWhenTheScenarioHasOne) {
+  const auto options = ReplayScenario(ExcerptDir(), {"r1", "r2"}, 1.0);
+  const std::unique_ptr<StepSource> replay = MakeStepSource(options);
+  ASSERT_NE(dynamic_cast<const MrclamReplay*>(replay.get()), nullptr);
+  EXPECT_EQ(replay->Truth().frames.size(), 2u);
+
+  common::ScenarioOptions simulated = options;
+  simulated.replay.enabled = false;
+  const std::unique_ptr<StepSource> world = MakeStepSource(simulated);
+  EXPECT_EQ(dynamic_cast<const MrclamReplay*>(world.get()), nullptr);
+  EXPECT_EQ(world->Step().size(), 2u);
 }
 
 TEST(MrclamReplayTest, ScenarioReplaySectionDerivesTheRunAndResolvesTheFolder) {

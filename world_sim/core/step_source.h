@@ -1,8 +1,10 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "common/config/scenario_options.h"
 #include "common/sensor_types.h"
 
 namespace mrslam::world_sim {
@@ -21,5 +23,9 @@ class StepSource {
   virtual std::uint32_t step() const = 0;
   virtual double time_s() const = 0;
 };
+
+// The scenario's source: the simulated world, or the recorded data set when replay.dir is set
+// (throws MrclamError when one of its files is missing).
+std::unique_ptr<StepSource> MakeStepSource(const common::ScenarioOptions& options);
 
 }  // namespace mrslam::world_sim

@@ -28,12 +28,13 @@ struct RobotWriters {
 };
 // The scenario's source: the simulated world, or a recorded data set when replay is set.
 std::unique_ptr<StepSource> MakeSource(const common::ScenarioOptions& s) {
-  if (!s.replay.enabled) return std::make_unique<World>(s);
-  auto replay = std::make_unique<MrclamReplay>(s);
+  auto source = MakeStepSource(s);
+  const auto* replay = dynamic_cast<const MrclamReplay*>(source.get());
+  if (replay == nullptr) return source;
   for (const auto& problem : replay->problems()) spdlog::warn("skipped malformed row: {}", problem);
   spdlog::info("replaying '{}' from {} s for {} steps of {} s", s.replay.dir, s.replay.start_s, s.run.steps,
                s.replay.step_s);
-  return replay;
+  return source;
 }
 }  // namespace
 
