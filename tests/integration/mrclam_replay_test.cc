@@ -8,22 +8,14 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <map>
 
 #include "common/config/scenario_options.h"
-#include "common/dds/msg_conversion.h"
-#include "common/dds/participant.h"
 #include "common/se2.h"
-#include "mrslamPubSubTypes.h"
-#include "tests/integration/child_process.h"
+#include "tests/integration/run_recorder.h"
 
 namespace mrslam {
 namespace {
 
-using std::chrono::milliseconds;
-using std::chrono::seconds;
-using testing::BinPath;
-using testing::ChildProcess;
 using testing::SourcePath;
 
 constexpr int kDomain = 130;  // this test's own DDS domains: 130..134
@@ -50,67 +42,18 @@ TEST(MrclamReplayTest, ThreeAgentsTrackSixtySecondsOfDataset6) {
   std::vector<std::string> common_args = {"--scenario", scenario_path, "--domain", std::to_string(kDomain)};
   for (const auto& o : overrides) common_args.insert(common_args.end(), {"--set", o});
 
-  dds::Participant participant({kDomain, "mrclam_test", false});
-  dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic);
-  std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> readers;
-  for (const auto& r : scenario.robots) {
-    readers[r.id] = std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id));
-  }
-  std::vector<std::string> ids;
-  for (const auto& r : scenario.robots) ids.push_back(r.id);
-  const auto agents = testing::StartAgents(ids, common_args, dir);
-  auto sim_args = common_args;
-  sim_args.insert(sim_args.end(), {"--wait-readers", "1"});
-  const auto sim_process = testing::StartBin("world_sim", sim_args, dir + "/world_sim.log");
-  ChildProcess& sim = *sim_process;
-
-  // Truth by step (the reader keeps every sample: RELIABLE KEEP_ALL).
-  std::map<std::uint32_t, common::GroundTruth> truth;
-  std::map<std::string, std::vector<msg::Estimate>> estimates;
-  const auto drain = [&](milliseconds wait) {
-    bool any = false;
-    msg::GroundTruth t;
-    while (truth_reader.Take(&t, wait)) {
-      truth[t.stamp().step()] = dds::FromMsg(t);
-      any = true;
-    }
-    for (auto& [id, reader] : readers) {
-      msg::Estimate e;
-      while (reader->Take(&e, milliseconds(1))) {
-        estimates[id].push_back(e);
-        any = true;
-      }
-    }
-    return any;
-  };
-  while (sim.running()) {
-    drain(milliseconds(20));
-    sim.WaitExit(milliseconds(1));
-  }
-  ASSERT_EQ(sim.WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(dir + "/world_sim.log");
-  for (std::size_t i = 0; i < agents.size(); ++i) {
-    const auto& id = scenario.robots[i].id;
-    EXPECT_EQ(agents[i]->WaitExit(seconds(30)), std::optional<int>(0)) << testing::ReadFile(dir + "/" + id + ".log");
-  }
-  while (drain(milliseconds(300))) {
-  }
+  testing::RunRecorder recorder(kDomain, scenario);
+  recorder.Run(common_args, dir);
+  if (HasFatalFailure()) return;
   EXPECT_THAT(testing::ReadFile(dir + "/world_sim.log"), ::testing::HasSubstr("measurements published"));
 
   for (const auto& r : scenario.robots) {
-    const auto& list = estimates[r.id];
+    const auto& list = recorder.estimates(r.id);
     ASSERT_EQ(list.size(), 600u) << r.id;
     double sum_sq = 0.0, max_error = 0.0;
     for (const auto& e : list) {
-      const auto it = truth.find(e.stamp().step());
-      ASSERT_NE(it, truth.end()) << "no truth for step " << e.stamp().step();
-      common::Pose2 frame, pose;
-      for (const auto& [id, f] : it->second.frames) {
-        if (id == r.id) frame = f;
-      }
-      for (const auto& t : it->second.robots) {
-        if (t.id == r.id) pose = t.pose;
-      }
-      const common::Pose2 truth_in_frame = common::Between(frame, pose);
+      const common::Pose2 truth_in_frame =
+          common::Between(recorder.Frame(r.id), recorder.TruePose(e.stamp().step(), r.id));
       const double error = std::hypot(e.pose().x_m() - truth_in_frame.x, e.pose().y_m() - truth_in_frame.y);
       sum_sq += error * error;
       max_error = std::max(max_error, error);
