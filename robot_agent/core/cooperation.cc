@@ -6,6 +6,7 @@
 #include <tuple>
 #include <utility>
 
+#include "common/angles.h"
 #include "common/gaussian.h"
 #include "robot_agent/core/map_fusion.h"
 
@@ -36,8 +37,14 @@
 //    the same numbers (each uses the pose the other sent and its own kept pose), so their
 //    results are inverses of each other up to the linearization of the fusion.
 //  * Maps. A snapshot holds the confirmed landmarks of the sender's estimate (at most
-//    max_snapshot_landmarks) and the sender's transforms. The receiver moves the landmarks into
-//    its frame with the transform's covariance (map_fusion.h) and merges them into its filter.
+//    max_snapshot_landmarks) and the sender's transforms. The receiver first refines the
+//    transform with it: it matches the sender's landmarks to its own confirmed ones (reported
+//    identities, else the Mahalanobis gate through the held transform) and aligns the matched
+//    pairs with the held transform as prior (AlignLandmarks, rendezvous.h), which uses every
+//    landmark both robots know instead of one detection. Both agents send their snapshots in
+//    the same step and align the same two maps, so their results stay inverses of each other
+//    (up to linearization). Then it moves the landmarks into its frame with the refined
+//    transform's covariance (map_fusion.h) and merges them into its filter.
 //    Transitive frames: from a snapshot of j holding T(G_j <- G_k), the receiver composes
 //    T(G_i <- G_k) = T(G_i <- G_j) T(G_j <- G_k) for every k it did not know; a chained
 //    transform is later refined (SCI) by newer chains or replaced in effect by meeting k.
@@ -69,6 +76,32 @@ bool ValidLandmark(const MapLandmark& l) {
 
 bool ValidTransform(const FrameTransform& t) {
   return Finite(t.t_self_peer) && common::IsSymmetricPositiveDefinite<3>(t.covariance);
+}
+
+// The landmarks a snapshot carries: the confirmed ones of the estimate, the most recently seen
+// first when the bound cuts. The alignment selects the own map the same way, so that both sides
+// of a rendezvous align the same two sets of landmarks.
+std::vector<MapLandmark> SnapshotLandmarks(const FilterEstimate& estimate, int max_landmarks) {
+  std::vector<const MapLandmark*> confirmed;
+  for (const auto& l : estimate.landmarks) {
+    if (!l.tentative && ValidLandmark(l)) confirmed.push_back(&l);
+  }
+  std::stable_sort(confirmed.begin(), confirmed.end(),
+                   [](const MapLandmark* a, const MapLandmark* b) { return a->last_seen_step > b->last_seen_step; });
+  if (confirmed.size() > static_cast<std::size_t>(max_landmarks)) confirmed.resize(max_landmarks);
+  std::vector<MapLandmark> out;
+  out.reserve(confirmed.size());
+  for (const MapLandmark* l : confirmed) out.push_back(*l);
+  return out;
+}
+
+// A map's heading of a landmark (its direction of travel) constrains an alignment when the
+// landmark moves and its heading is known better than half the variance of a uniform heading
+// (pi^2 / 3, what the filters report for an unknown one).
+bool HeadingKnown(const MapLandmark& l) { return l.moving && l.covariance(2, 2) < common::kPi * common::kPi / 6.0; }
+
+MatchCandidate Candidate(const MapLandmark& l) {
+  return {l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id};
 }
 
 template <typename Map>
@@ -266,7 +299,7 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
   }
   peer.encounter_last = step;
   ++peer.encounter_pairs;
-  const bool refines = peer.event_index >= 0 && step <= peer.encounter_first + kEncounterRefineSteps;
+  const bool refines = Refining(peer, step);
 
   const MutualDetection z{own.range_m, own.bearing_rad, theirs.range_m, theirs.bearing_rad, theirs.has_range};
   const TransformEstimate estimate = TransformFromMutual(own.pose, own.covariance, theirs.sender_pose,
@@ -289,28 +322,65 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
     return;
   }
 
-  if (!peer.transform) {
-    peer.transform = estimate;
-    peer.met = true;
-  } else {
+  TransformEstimate held = estimate;
+  if (peer.transform) {
     // An estimate far outside the one held (e.g. a detection paired with the wrong robot) is
     // not fused.
     const double gate = ChiSquare3Quantile(scenario_.cooperation.transform_gate_probability);
-    if (!peer.met || TransformDistanceSquared(*peer.transform, estimate) <= gate) {
-      peer.transform = FuseSplitCi(*peer.transform, estimate);
-    }
-    peer.met = true;
+    const bool fuse = !peer.met || TransformDistanceSquared(*peer.transform, estimate) <= gate;
+    held = fuse ? FuseSplitCi(*peer.transform, estimate) : *peer.transform;
   }
-  peer.transform_step = step;
-  if (refines) {
-    RendezvousEvent& e = rendezvous_[peer.event_index];
-    e.t_self_peer = peer.transform->t;
-    e.covariance = peer.transform->Covariance();
+  peer.met = true;
+  HoldTransform(&peer, held, step);
+}
+
+bool Cooperation::Refining(const PeerState& peer, std::uint32_t step) const {
+  return peer.event_index >= 0 && step <= peer.encounter_first + kEncounterRefineSteps;
+}
+
+void Cooperation::HoldTransform(PeerState* peer, const TransformEstimate& t, std::uint32_t step) {
+  peer->transform = t;
+  peer->transform_step = step;
+  if (Refining(*peer, step)) {
+    RendezvousEvent& e = rendezvous_[peer->event_index];
+    e.t_self_peer = t.t;
+    e.covariance = t.Covariance();
   }
+}
+
+void Cooperation::AlignWithSnapshot(const MapSnapshot& m, const FilterEstimate& own, PeerState* sender) {
+  // Moving landmarks are compared only when both maps hold them at the same step (a snapshot is
+  // predicted to its own step).
+  const bool same_step = own.step == m.header.step;
+  const TransformEstimate& held = *sender->transform;
+  const Eigen::Matrix3d t_cov = held.Covariance();
+  std::vector<MapLandmark> mine, theirs;
+  std::vector<MatchCandidate> mine_c, theirs_c;
+  for (const auto& l : SnapshotLandmarks(own, scenario_.cooperation.max_snapshot_landmarks)) {
+    if (!same_step && l.moving) continue;
+    mine.push_back(l);
+    mine_c.push_back(Candidate(l));
+  }
+  for (const auto& l : m.landmarks) {
+    if (!same_step && l.moving) continue;
+    theirs.push_back(l);
+    theirs_c.push_back(Candidate(TransformLandmark(l, held.t, t_cov)));
+  }
+  const std::vector<int> match =
+      MatchLandmarks(mine_c, theirs_c, common::ChiSquare2Quantile(scenario_.cooperation.match_gate_probability));
+  std::vector<LandmarkPair> pairs;
+  for (std::size_t i = 0; i < match.size(); ++i) {
+    if (match[i] < 0) continue;
+    const MapLandmark& a = mine[match[i]];
+    const MapLandmark& b = theirs[i];
+    pairs.push_back({a.mean, a.covariance, b.mean, b.covariance, HeadingKnown(a) && HeadingKnown(b)});
+  }
+  if (const auto aligned = AlignLandmarks(held, pairs)) HoldTransform(sender, *aligned, m.header.step);
 }
 
 void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
   PeerState& sender = peers_[m.header.sender];
+  if (filter != nullptr) AlignWithSnapshot(m, filter->Estimate(), &sender);
   const TransformEstimate& t_self_sender = *sender.transform;
   // Transitive frames: T(G_self <- G_k) = T(G_self <- G_sender) * T(G_sender <- G_k).
   for (const auto& ft : m.known_transforms) {
@@ -335,16 +405,7 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
 MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const FilterEstimate& estimate) const {
   MapSnapshot m;
   m.header = {robot_id_, peer, estimate.step, estimate.time_s, 0};
-  const auto bound = static_cast<std::size_t>(scenario_.cooperation.max_snapshot_landmarks);
-  // Confirmed landmarks, the most recently seen first when the bound cuts.
-  std::vector<const MapLandmark*> confirmed;
-  for (const auto& l : estimate.landmarks) {
-    if (!l.tentative && ValidLandmark(l)) confirmed.push_back(&l);
-  }
-  std::stable_sort(confirmed.begin(), confirmed.end(),
-                   [](const MapLandmark* a, const MapLandmark* b) { return a->last_seen_step > b->last_seen_step; });
-  if (confirmed.size() > bound) confirmed.resize(bound);
-  for (const MapLandmark* l : confirmed) m.landmarks.push_back(*l);
+  m.landmarks = SnapshotLandmarks(estimate, scenario_.cooperation.max_snapshot_landmarks);
   for (const auto& t : known_transforms()) {
     if (t.peer != peer) m.known_transforms.push_back(t);
   }

@@ -86,6 +86,14 @@ class Cooperation {
   void ApplyMutualDetection(const std::string& peer, std::uint32_t own_step, const OwnDetection& own,
                             const RelativeMeasurement& theirs, SlamFilter* filter);
   void ApplySnapshot(const MapSnapshot& m, SlamFilter* filter);
+  // Refines the transform to the snapshot's sender by the landmarks both maps hold (matched
+  // through the held transform, aligned by AlignLandmarks with the held one as prior).
+  void AlignWithSnapshot(const MapSnapshot& m, const FilterEstimate& own, PeerState* sender);
+  // Whether an estimate made at step still refines the peer's current rendezvous event (the
+  // first kEncounterRefineSteps steps of the encounter).
+  bool Refining(const PeerState& peer, std::uint32_t step) const;
+  // Holds t as the transform to peer, estimated at step (and as the event's, while refining).
+  void HoldTransform(PeerState* peer, const TransformEstimate& t, std::uint32_t step);
   MapSnapshot MakeSnapshot(const std::string& peer, const FilterEstimate& estimate) const;
   void Reject() { ++rejected_; }
 

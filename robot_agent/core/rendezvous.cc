@@ -172,4 +172,78 @@ TransformEstimate FuseSplitCi(const TransformEstimate& a, const TransformEstimat
   return out;
 }
 
+std::optional<TransformEstimate> AlignLandmarks(const TransformEstimate& prior,
+                                                const std::vector<LandmarkPair>& pairs) {
+  if (pairs.empty()) return std::nullopt;
+  const double share = 1.0 / static_cast<double>(pairs.size());
+  // Information J^T W J and gradient J^T W r of the landmark factors at t (W = S^-1 over the
+  // components used, zero for an unused heading).
+  const auto landmarks = [&](const Pose2& t, Eigen::Matrix3d* info, Eigen::Vector3d* grad) {
+    info->setZero();
+    grad->setZero();
+    for (const LandmarkPair& pair : pairs) {
+      const Pose2 l_b{pair.in_b.x(), pair.in_b.y(), pair.in_b.z()};
+      const Pose2 predicted = common::Compose(t, l_b);
+      const Eigen::Matrix3d jt = common::ComposeJacobianLeft(t, l_b);
+      const Eigen::Matrix3d jr = common::ComposeJacobianRight(t, l_b);
+      const Eigen::Matrix3d s = pair.covariance_a + jr * pair.covariance_b * jr.transpose();
+      Eigen::Matrix3d w = Eigen::Matrix3d::Zero();
+      if (pair.use_heading) {
+        w = s.inverse();
+      } else {
+        w.topLeftCorner<2, 2>() = s.topLeftCorner<2, 2>().inverse();
+      }
+      const Eigen::Vector3d r = Difference(Pose2{pair.in_a.x(), pair.in_a.y(), pair.in_a.z()}, predicted);
+      *info += jt.transpose() * w * jt;
+      *grad += jt.transpose() * w * r;
+    }
+  };
+  struct Solution {
+    Pose2 t;
+    Eigen::Matrix3d p, prior_info;
+    bool ok = false;
+  };
+  constexpr int kMaxIterations = 20;
+  constexpr double kConverged = 1e-12;
+  const auto solve = [&](double omega) {
+    Solution out;
+    const Eigen::LLT<Eigen::Matrix3d> prior_llt(prior.dependent / omega + prior.independent);
+    if (prior_llt.info() != Eigen::Success) return out;
+    out.prior_info = prior_llt.solve(Eigen::Matrix3d::Identity());
+    const double weight = (1.0 - omega) * share;
+    Eigen::Matrix3d info;
+    Eigen::Vector3d grad;
+    out.t = prior.t;
+    for (int i = 0; i <= kMaxIterations; ++i) {
+      landmarks(out.t, &info, &grad);
+      info = out.prior_info + weight * info;
+      grad = out.prior_info * Difference(prior.t, out.t) + weight * grad;
+      const Eigen::LLT<Eigen::Matrix3d> llt(info);
+      if (llt.info() != Eigen::Success) return out;
+      const Eigen::Vector3d delta = llt.solve(grad);
+      if (i == kMaxIterations || delta.squaredNorm() < kConverged) {
+        out.p = Symmetrize(llt.solve(Eigen::Matrix3d::Identity()));
+        out.ok = out.p.allFinite() && out.t.Vector().allFinite();
+        return out;
+      }
+      out.t = Wrapped(out.t.Vector() + delta);
+    }
+    return out;
+  };
+  constexpr double kEps = 1e-6;
+  const double omega = GoldenSection(
+      [&](double w) {
+        const Solution s = solve(w);
+        return s.ok ? s.p.determinant() : std::numeric_limits<double>::infinity();
+      },
+      kEps, 1.0 - kEps, 60);
+  const Solution s = solve(omega);
+  if (!s.ok) return std::nullopt;
+  TransformEstimate out;
+  out.t = s.t;
+  out.independent = Symmetrize(s.p * s.prior_info * prior.independent * s.prior_info * s.p);
+  out.dependent = Symmetrize(s.p - out.independent);
+  return out;
+}
+
 }  // namespace mrslam::robot_agent

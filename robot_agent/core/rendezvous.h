@@ -1,5 +1,8 @@
 #pragma once
 
+#include <optional>
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "common/se2.h"
@@ -7,7 +10,8 @@
 // The maths of a rendezvous (DESIGN.md "Frames and models", Zhou & Roumeliotis 2006): the
 // transform between two robots' frames from their mutual range-bearing detections and their
 // pose estimates, with its covariance; the composition of transforms (chaining through a peer);
-// and the fusion of repeated estimates of one transform.
+// the fusion of repeated estimates of one transform; and its refinement by the landmarks both
+// robots' maps hold.
 namespace mrslam::robot_agent {
 
 // One mutual detection: robot i saw robot j at (range_ij, bearing_ij) and robot j saw robot i
@@ -81,5 +85,37 @@ double ChiSquare3Quantile(double p);
 // with omega minimizing det(P) (golden-section search). It is consistent for any correlation of
 // the dependent parts, and when both are zero it is the information (Kalman) fusion.
 TransformEstimate FuseSplitCi(const TransformEstimate& a, const TransformEstimate& b);
+
+// One landmark as two maps hold it: pose (x, y, heading) and covariance in G_a (the own map)
+// and in G_b (the peer's map), at the same step. use_heading: both maps know its heading (a
+// moving landmark's direction of travel); otherwise only the position constrains the alignment.
+struct LandmarkPair {
+  Eigen::Vector3d in_a = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance_a = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d in_b = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance_b = Eigen::Matrix3d::Identity();
+  bool use_heading = false;
+};
+
+// Refines an estimate of T = T(G_a <- G_b) by the landmarks both maps hold: a weighted
+// least-squares 2-D rigid alignment, solved by Gauss-Newton over (x, y, heading), with the
+// held estimate as a prior factor. Landmark n gives the residual
+//   r_n = l_a - T * l_b  (position; and heading, wrapped, when use_heading),
+//   S_n = P_a + J_r P_b J_r^T,  J_r = ComposeJacobianRight(T, l_b),  d r_n / d T = -ComposeJacobianLeft(T, l_b).
+// The factors are not independent: every landmark of one map carries that robot's pose error,
+// the same error that makes the prior (its dependent part), so the combination is a split
+// covariance intersection in information form. For omega in [0, 1]:
+//   Lambda(omega) = (D / omega + I)^-1 + (1 - omega) / N * sum_n J_n^T S_n^-1 J_n,
+// the landmark factors taken with equal weights 1 / N (covariance intersection among N
+// estimates of unknown correlation) and all together with 1 - omega against the prior's
+// dependent part D (its independent part I, the measurement noise, stays independent);
+// T(omega) minimizes the matching weighted sum of squares and P = Lambda^-1 at T(omega);
+// omega minimizes det(P). Consistent whatever the correlations; with one pair and no heading
+// the landmarks alone do not fix T and the prior fills the gap. The independent part of the
+// result is P (D / omega + I)^-1 I (D / omega + I)^-1 P, the rest is dependent. Swapping a and b
+// in every pair and inverting the prior gives the inverse result (the landmark residuals are the
+// same up to a rotation; the prior up to linearization). Returns nullopt when pairs is empty or
+// Gauss-Newton fails.
+std::optional<TransformEstimate> AlignLandmarks(const TransformEstimate& prior, const std::vector<LandmarkPair>& pairs);
 
 }  // namespace mrslam::robot_agent

@@ -248,6 +248,162 @@ TEST(Rendezvous, ChiSquare3Quantile) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Alignment on common landmarks.
+
+// One alignment problem: n landmarks (every other one moving, with a known heading) seen by two
+// maps whose frames are a and b, T = T(G_a <- G_b) the truth. Each map's landmarks share one
+// rigid error of that map (drawn from `shared`, standing for the robot's pose error that every
+// landmark it mapped carries) plus independent noise of sd noise_sd (position, and heading). The
+// prior is the truth perturbed by both maps' shared errors (the pose composition carries the
+// same errors) and an independent error drawn from prior_independent; every covariance reported
+// is the true one to first order.
+struct AlignmentCase {
+  Pose2 truth;
+  TransformEstimate prior;
+  std::vector<LandmarkPair> pairs;
+};
+
+AlignmentCase MakeAlignmentCase(common::Rng* rng, int n, const Eigen::Matrix3d& shared, double noise_sd,
+                                const Eigen::Matrix3d& prior_independent) {
+  AlignmentCase c;
+  // A draw around mean (mean itself for a zero covariance).
+  const auto perturb = [&](const Pose2& mean, const Eigen::Matrix3d& cov) {
+    return cov.isZero() ? mean : SamplePose(rng, mean, cov);
+  };
+  c.truth = {rng->Uniform(-5, 5), rng->Uniform(-5, 5), rng->Uniform(-3.1, 3.1)};
+  const Pose2 error_a = perturb(Pose2{}, shared), error_b = perturb(Pose2{}, shared);
+  const Eigen::Matrix3d noise = Eigen::Vector3d::Constant(noise_sd * noise_sd).asDiagonal();
+  // A landmark pose as a map with frame error `error` holds it, and the covariance of that.
+  const auto mapped = [&](const Pose2& truth, const Pose2& error, Eigen::Vector3d* mean, Eigen::Matrix3d* cov) {
+    const Pose2 noisy = perturb(common::Compose(error, truth), noise);
+    *mean = noisy.Vector();
+    const Eigen::Matrix3d j = common::ComposeJacobianLeft(Pose2{}, truth);
+    *cov = j * shared * j.transpose() + noise;
+  };
+  for (int l = 0; l < n; ++l) {
+    const Pose2 in_b{rng->Uniform(-6, 6), rng->Uniform(-6, 6), rng->Uniform(-3.1, 3.1)};
+    LandmarkPair pair;
+    mapped(common::Compose(c.truth, in_b), error_a, &pair.in_a, &pair.covariance_a);
+    mapped(in_b, error_b, &pair.in_b, &pair.covariance_b);
+    pair.use_heading = l % 2 == 1;
+    c.pairs.push_back(pair);
+  }
+  // prior = error_a * T * error_b^-1 * independent error, covariance by first-order chaining.
+  TransformEstimate a, t, b;
+  a.dependent = shared;
+  t.t = c.truth;
+  b.dependent = shared;
+  const TransformEstimate chained = ChainTransforms(ChainTransforms(a, t), InvertTransform(b));
+  c.prior.t = common::Compose(common::Compose(common::Compose(error_a, c.truth), common::Inverse(error_b)),
+                              perturb(Pose2{}, prior_independent));
+  c.prior.dependent = chained.Covariance();
+  c.prior.independent = prior_independent;
+  return c;
+}
+
+TEST(Alignment, ExactWithoutNoise) {
+  common::Rng rng(31, "align");
+  for (int trial = 0; trial < 100; ++trial) {
+    // Exact maps (covariances 1e-12), a prior off by decimetres: the landmarks decide.
+    AlignmentCase c = MakeAlignmentCase(&rng, 2 + trial % 5, Eigen::Matrix3d::Zero(), 0.0, Eigen::Matrix3d::Zero());
+    for (auto& p : c.pairs) {
+      p.covariance_a = 1e-12 * Eigen::Matrix3d::Identity();
+      p.covariance_b = 1e-12 * Eigen::Matrix3d::Identity();
+    }
+    c.prior.t = common::Compose(c.truth, Pose2{0.3, -0.2, 0.1});
+    c.prior.dependent = Eigen::Vector3d(0.09, 0.09, 0.01).asDiagonal();
+    c.prior.independent = Eigen::Vector3d(0.01, 0.01, 0.001).asDiagonal();
+    const std::optional<TransformEstimate> aligned = AlignLandmarks(c.prior, c.pairs);
+    ASSERT_TRUE(aligned.has_value());
+    EXPECT_THAT(aligned->t, IsNearlyPose(c.truth, 1e-6)) << "trial " << trial;
+    // One moving landmark with its heading fixes the transform on its own.
+    const std::optional<TransformEstimate> one = AlignLandmarks(c.prior, {c.pairs[1]});
+    ASSERT_TRUE(one.has_value());
+    EXPECT_THAT(one->t, IsNearlyPose(c.truth, 1e-6)) << "trial " << trial;
+  }
+  TransformEstimate prior;
+  prior.dependent = Eigen::Matrix3d::Identity();
+  EXPECT_FALSE(AlignLandmarks(prior, {}).has_value());
+}
+
+// Independent landmark noise: the alignment is consistent and close to the best any estimator
+// can do with these landmarks (the Cramer-Rao bound of the landmarks alone, from the information
+// sum J^T S^-1 J at the truth). It may not reach the bound: the landmarks are weighted as if
+// their errors could be correlated (1 / N each), so the prior keeps a say; 1.5 times the bound
+// is far below the prior's own error (0.42 m, 0.1 rad).
+TEST(Alignment, RecoversTheTransformFromNoisyLandmarks) {
+  common::Rng rng(32, "align");
+  constexpr int kTrials = 1000, kLandmarks = 8;
+  const Eigen::Matrix3d prior_cov = Eigen::Vector3d(0.09, 0.09, 0.01).asDiagonal();
+  double nees_sum = 0.0, translation_sq = 0.0, heading_sq = 0.0, bound_translation = 0.0, bound_heading = 0.0;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    AlignmentCase c = MakeAlignmentCase(&rng, kLandmarks, Eigen::Matrix3d::Zero(), 0.05, prior_cov);
+    const std::optional<TransformEstimate> aligned = AlignLandmarks(c.prior, c.pairs);
+    ASSERT_TRUE(aligned.has_value());
+    const Eigen::Vector3d e = PoseError(aligned->t, c.truth);
+    translation_sq += e.head<2>().squaredNorm();
+    heading_sq += e.z() * e.z();
+    nees_sum += Nees(aligned->t, c.truth, aligned->Covariance());
+    Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
+    for (const auto& p : c.pairs) {
+      const Pose2 l_b{p.in_b.x(), p.in_b.y(), p.in_b.z()};
+      const Eigen::Matrix3d j = common::ComposeJacobianLeft(c.truth, l_b);
+      const Eigen::Matrix3d jr = common::ComposeJacobianRight(c.truth, l_b);
+      const Eigen::Matrix3d s = p.covariance_a + jr * p.covariance_b * jr.transpose();
+      Eigen::Matrix3d w = Eigen::Matrix3d::Zero();
+      if (p.use_heading) {
+        w = s.inverse();
+      } else {
+        w.topLeftCorner<2, 2>() = s.topLeftCorner<2, 2>().inverse();
+      }
+      info += j.transpose() * w * j;
+    }
+    const Eigen::Matrix3d crb = info.inverse();
+    bound_translation += crb(0, 0) + crb(1, 1);
+    bound_heading += crb(2, 2);
+  }
+  EXPECT_LT(nees_sum / kTrials, 3.0);
+  EXPECT_LT(std::sqrt(translation_sq / kTrials), 1.5 * std::sqrt(bound_translation / kTrials));
+  EXPECT_LT(std::sqrt(heading_sq / kTrials), 1.5 * std::sqrt(bound_heading / kTrials));
+}
+
+// Each map's landmarks share that map's error, and the prior shares both: the landmarks are
+// not independent of each other nor of the prior. Counting them as independent would be
+// overconfident; the alignment stays consistent.
+TEST(Alignment, ConsistentWhenLandmarksShareTheMapsErrors) {
+  common::Rng rng(33, "align");
+  constexpr int kTrials = 2000;
+  const Eigen::Matrix3d shared = Eigen::Vector3d(0.04, 0.04, 0.0025).asDiagonal();
+  const Eigen::Matrix3d independent = Eigen::Vector3d(0.01, 0.01, 0.001).asDiagonal();
+  double nees_sum = 0.0;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    const AlignmentCase c = MakeAlignmentCase(&rng, 1 + trial % 10, shared, 0.05, independent);
+    const std::optional<TransformEstimate> aligned = AlignLandmarks(c.prior, c.pairs);
+    ASSERT_TRUE(aligned.has_value());
+    EXPECT_LE(aligned->Covariance().determinant(), c.prior.Covariance().determinant() * (1.0 + 1e-6));
+    nees_sum += Nees(aligned->t, c.truth, aligned->Covariance());
+  }
+  EXPECT_LT(nees_sum / kTrials, 3.0 * 1.1);
+}
+
+// The other side aligns the same landmarks the other way round from the inverse prior: it gets
+// the inverse transform (up to the linearization of the prior's inverse).
+TEST(Alignment, BothSidesGetInverseTransforms) {
+  common::Rng rng(34, "align");
+  const Eigen::Matrix3d shared = Eigen::Vector3d(0.04, 0.04, 0.0025).asDiagonal();
+  const Eigen::Matrix3d independent = Eigen::Vector3d(0.01, 0.01, 0.001).asDiagonal();
+  for (int trial = 0; trial < 200; ++trial) {
+    const AlignmentCase c = MakeAlignmentCase(&rng, 1 + trial % 6, shared, 0.05, independent);
+    std::vector<LandmarkPair> swapped;
+    for (const auto& p : c.pairs) swapped.push_back({p.in_b, p.covariance_b, p.in_a, p.covariance_a, p.use_heading});
+    const std::optional<TransformEstimate> ab = AlignLandmarks(c.prior, c.pairs);
+    const std::optional<TransformEstimate> ba = AlignLandmarks(InvertTransform(c.prior), swapped);
+    ASSERT_TRUE(ab.has_value() && ba.has_value());
+    EXPECT_THAT(common::Compose(ab->t, ba->t), IsNearlyPose(Pose2{}, 0.01)) << "trial " << trial;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
 // Cooperation among agents, in process, with a fake filter.
 
 // A filter whose estimate the test sets; merges like FastSLAM's rule for one hypothesis.
