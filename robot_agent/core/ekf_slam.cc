@@ -179,7 +179,7 @@ void EkfSlam::SightPoint(const Detection& det, Eigen::Vector2d* point, Eigen::Ma
   *cov = g_r * p_.topLeftCorner<3, 3>() * g_r.transpose() + g_z * r_ * g_z.transpose();
 }
 
-void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id) {
+void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, bool moving) {
   const int n = static_cast<int>(x_.size());
   const double a = x_(2) + det.bearing_rad, c = std::cos(a), s = std::sin(a), r = det.range_m;
   Eigen::Matrix<double, 2, 3> g_r;
@@ -199,6 +199,7 @@ void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int land
   slot.track_id = track_id;
   slot.landmark_id = landmark_id;
   slot.last_seen_step = step_;
+  slot.moving = moving;
   slots_.push_back(slot);
 }
 
@@ -226,7 +227,7 @@ void EkfSlam::RemoveSlots(std::vector<int> slots) {
   std::vector<int> keep = {0, 1, 2};
   std::vector<Slot> kept_slots;
   std::size_t next = 0;
-  for (int s = 0; s < NumMapped(); ++s) {
+  for (int s = 0; s < NumSlots(); ++s) {
     if (next < slots.size() && slots[next] == s) {
       ++next;
       continue;
@@ -254,101 +255,56 @@ bool EkfSlam::ExpectedInView(int s) const {
   return true;
 }
 
-void EkfSlam::StartMovingTrack(const Detection& det, std::uint32_t track_id, int landmark_id) {
-  MovingTrack t;
-  t.track_id = track_id;
-  t.landmark_id = landmark_id;
-  SightPoint(det, &t.position, &t.covariance);
-  t.anchor = t.position;
-  t.anchor_covariance = t.covariance;
-  t.last_seen_step = step_;
-  moving_.push_back(t);
-  moved_.push_back({step_, track_id, landmark_id, t.position});
+void EkfSlam::Restart(int s, const Detection& det, std::vector<int>* removals) {
+  ++flagged_observations_;
+  removals->push_back(s);
+  restarts_.push_back({det, slots_[s].track_id, slots_[s].landmark_id});
+  if (slots_[s].moving) return;
+  Eigen::Vector2d point;
+  Eigen::Matrix2d cov;
+  SightPoint(det, &point, &cov);
+  moved_.push_back({step_, slots_[s].track_id, slots_[s].landmark_id, point});
 }
 
 void EkfSlam::HandleLeftovers(const std::vector<Detection>& detections, std::vector<std::uint8_t>* det_used,
                               const std::vector<std::uint8_t>& slot_done, std::vector<int>* removals) {
   const double s_max = filter_.max_landmark_speed_mps * step_dt_s_;
   const double match_d2 = common::ChiSquare2Quantile(filter_.gate_probability);
-  // Candidates (d2, detection, target): target >= 0 a mapped slot (a ghost), < 0 the moving
-  // track -1 - target. Position residual e = g(R, z) - m with covariance
-  //   C = Cov(g(R, z)) + P_mm + (s_max * frames)^2 I   (motion of unknown direction).
-  std::vector<std::tuple<double, int, int>> candidates;
-  std::vector<Eigen::Vector2d> points(detections.size());
-  std::vector<Eigen::Matrix2d> covs(detections.size());
-  std::vector<std::uint8_t> ghost(NumMapped(), 0);
-  for (int s = 0; s < NumMapped(); ++s) ghost[s] = !slot_done[s] && ExpectedInView(s);
+  // Candidates (d2, distance, detection, slot) for the unmatched slots: a map landmark expected
+  // in view (a ghost), one on probation wherever it is. The position residual e = g(R, z) - m
+  // with covariance C = Cov(g(R, z)) + P_mm, less a motion of unknown direction of at most
+  // s_max * frames (frames since last seen, at most kMaxGhostMotionFrames for a map landmark):
+  //   e' = e max(0, 1 - s_max frames / |e|),  d2 = e'^T C^-1 e'  (0 within the reach of motion),
+  // nearest first among equal d2.
+  std::vector<std::tuple<double, double, int, int>> candidates;
+  std::vector<std::uint8_t> ghost(NumSlots(), 0);
+  for (int s = 0; s < NumSlots(); ++s) ghost[s] = !slot_done[s] && (slots_[s].moving || ExpectedInView(s));
   for (int d = 0; d < static_cast<int>(detections.size()); ++d) {
     if ((*det_used)[d]) continue;
-    SightPoint(detections[d], &points[d], &covs[d]);
-    for (int s = 0; s < NumMapped(); ++s) {
+    Eigen::Vector2d point;
+    Eigen::Matrix2d cov;
+    SightPoint(detections[d], &point, &cov);
+    for (int s = 0; s < NumSlots(); ++s) {
       if (!ghost[s]) continue;
-      const int frames = std::min(kMaxGhostMotionFrames, static_cast<int>(step_ - slots_[s].last_seen_step));
-      const double grow = s_max * frames;
-      const Eigen::Vector2d e = points[d] - x_.segment<2>(3 + 2 * s);
-      const Eigen::Matrix2d c =
-          covs[d] + p_.block<2, 2>(3 + 2 * s, 3 + 2 * s) + grow * grow * Eigen::Matrix2d::Identity();
-      const auto d2 = common::MahalanobisSquared<2>(e, c);
-      if (d2 && *d2 <= match_d2) candidates.emplace_back(*d2, d, s);
-    }
-    for (int t = 0; t < NumMoving(); ++t) {
-      const double grow = s_max * static_cast<double>(step_ - moving_[t].last_seen_step);
-      const Eigen::Vector2d e = points[d] - moving_[t].position;
-      const Eigen::Matrix2d c = covs[d] + moving_[t].covariance + grow * grow * Eigen::Matrix2d::Identity();
-      const auto d2 = common::MahalanobisSquared<2>(e, c);
-      if (d2 && *d2 <= match_d2) candidates.emplace_back(*d2, d, -1 - t);
+      int frames = static_cast<int>(step_ - slots_[s].last_seen_step);
+      if (!slots_[s].moving) frames = std::min(kMaxGhostMotionFrames, frames);
+      const Eigen::Vector2d e = point - x_.segment<2>(3 + 2 * s);
+      const double distance = e.norm();
+      const Eigen::Vector2d rest = e * std::max(0.0, 1.0 - s_max * frames / std::max(distance, 1e-12));
+      const auto d2 = common::MahalanobisSquared<2>(rest, Eigen::Matrix2d(cov + p_.block<2, 2>(3 + 2 * s, 3 + 2 * s)));
+      if (d2 && *d2 <= match_d2) candidates.emplace_back(*d2, distance, d, s);
     }
   }
   std::sort(candidates.begin(), candidates.end());
-  std::vector<std::uint8_t> target_used_slot(NumMapped(), 0), target_used_track(NumMoving(), 0);
-  std::vector<std::pair<int, int>> returning;  // (detection, track)
-  for (const auto& [d2, d, target] : candidates) {
-    if ((*det_used)[d]) continue;
-    if (target >= 0) {
-      if (target_used_slot[target]) continue;
-      target_used_slot[target] = 1;
-      (*det_used)[d] = 1;
-      // The landmark is seen outside its expected area: it moved.
-      ++flagged_observations_;
-      ++matched_observations_;
-      removals->push_back(target);
-      StartMovingTrack(detections[d], slots_[target].track_id, slots_[target].landmark_id);
-      continue;
-    }
-    const int t = -1 - target;
-    if (target_used_track[t]) continue;
-    target_used_track[t] = 1;
+  std::vector<std::uint8_t> slot_used(NumSlots(), 0);
+  for (const auto& [d2, distance, d, s] : candidates) {
+    if ((*det_used)[d] || slot_used[s]) continue;
+    slot_used[s] = 1;
     (*det_used)[d] = 1;
-    MovingTrack& track = moving_[t];
-    track.position = points[d];
-    track.covariance = covs[d];
-    track.last_seen_step = step_;
-    // Stays put when within its own gate of the anchor: e^T (C + C_anchor)^-1 e <= chi2(ela).
-    const auto stay = common::MahalanobisSquared<2>(Eigen::Vector2d(track.position - track.anchor),
-                                                    Eigen::Matrix2d(track.covariance + track.anchor_covariance));
-    if (stay && *stay <= ela_gate_d2_) {
-      ++track.stay_frames;
-    } else {
-      track.anchor = track.position;
-      track.anchor_covariance = track.covariance;
-      track.stay_frames = 0;
-    }
-    if (track.stay_frames >= filter_.ela_return_after_frames) returning.emplace_back(d, t);
+    // The landmark is seen outside its expected area: it moved.
+    ++matched_observations_;
+    Restart(s, detections[d], removals);
   }
-  // Tracks that stayed put re-enter the map (appended after the removals, see Process).
-  std::vector<std::uint8_t> drop(NumMoving(), 0);
-  for (const auto& [d, t] : returning) {
-    returning_.push_back({detections[d], moving_[t].track_id, moving_[t].landmark_id});
-    drop[t] = 1;
-  }
-  // Moving tracks not seen for drop_after_misses frames are forgotten.
-  std::vector<MovingTrack> kept;
-  for (int t = 0; t < NumMoving(); ++t) {
-    if (drop[t]) continue;
-    if (static_cast<int>(step_ - moving_[t].last_seen_step) >= filter_.drop_after_misses) continue;
-    kept.push_back(moving_[t]);
-  }
-  moving_ = std::move(kept);
 }
 
 void EkfSlam::Process(const common::SensorStep& step) {
@@ -367,11 +323,12 @@ void EkfSlam::Process(const common::SensorStep& step) {
     return std::tie(a.range_m, a.bearing_rad, a.landmark_id) < std::tie(b.range_m, b.bearing_rad, b.landmark_id);
   });
   const int num_det = static_cast<int>(detections.size());
-  const int num_slots = NumMapped();
+  const int num_slots = NumSlots();
 
-  // Association: identities first, then nearest neighbours by increasing d2.
+  // Association: identities first, then nearest neighbours by increasing d2, the map landmarks
+  // before those on probation (which take only the detections the map leaves).
   std::vector<double> min_d2(num_det, std::numeric_limits<double>::infinity());
-  std::vector<std::tuple<double, int, int>> candidates;  // (d2, detection, slot)
+  std::vector<std::tuple<bool, double, int, int>> candidates;  // (on probation, d2, detection, slot)
   std::vector<std::uint8_t> det_used(num_det, 0), slot_done(num_slots, 0);
   std::vector<std::pair<int, int>> matches;  // (detection, slot)
   for (int d = 0; d < num_det; ++d) {
@@ -389,51 +346,63 @@ void EkfSlam::Process(const common::SensorStep& step) {
       if (detections[d].landmark_id >= 0 && slots_[s].landmark_id >= 0) continue;
       const double d2 = AssociationD2(detections[d], s);
       min_d2[d] = std::min(min_d2[d], d2);
-      if (gates_.Classify(d2) == AssociationKind::kMatched) candidates.emplace_back(d2, d, s);
+      if (gates_.Classify(d2) == AssociationKind::kMatched) candidates.emplace_back(slots_[s].moving, d2, d, s);
     }
   }
   std::sort(candidates.begin(), candidates.end());
-  for (const auto& [d2, d, s] : candidates) {
+  for (const auto& [probation, d2, d, s] : candidates) {
     if (det_used[d] || slot_done[s]) continue;
     matches.emplace_back(d, s);
     det_used[d] = slot_done[s] = 1;
   }
   matched_observations_ += static_cast<std::int64_t>(matches.size());
 
-  // ELA: which matched landmarks moved?
+  // ELA: which matched landmarks moved? Those on probation are tested against the map's.
   std::vector<bool> moving(matches.size(), false);
   if (ela_ && !matches.empty()) {
     std::vector<ElaObservation> obs;
-    for (const auto& [d, s] : matches) obs.push_back({s, detections[d].range_m, detections[d].bearing_rad});
+    for (const auto& [d, s] : matches) {
+      obs.push_back({s, detections[d].range_m, detections[d].bearing_rad, !slots_[s].moving});
+    }
     moving = ElaTest(x_, p_, obs, r_(0, 0), r_(1, 1), ela_gate_d2_).moving;
   }
 
-  // Correction with the landmarks that stood still.
+  // Correction with the map landmarks that stood still. One on probation that stood still has
+  // stayed within its area one more frame; after ela_return_after_frames such frames it is back.
   for (std::size_t i = 0; i < matches.size(); ++i) {
     if (moving[i]) continue;
     const auto [d, s] = matches[i];
-    JosephUpdate(&x_, &p_, s, Eigen::Vector2d(detections[d].range_m, detections[d].bearing_rad), r_);
-    slots_[s].last_seen_step = step_;
-    slots_[s].misses = 0;
+    Slot& slot = slots_[s];
+    slot.last_seen_step = step_;
+    slot.misses = 0;
+    if (slot.moving && ++slot.stay_frames >= filter_.ela_return_after_frames) {
+      slot.moving = false;
+      slot.stay_frames = 0;
+    }
+    if (!slot.moving) {
+      JosephUpdate(&x_, &p_, s, Eigen::Vector2d(detections[d].range_m, detections[d].bearing_rad), r_);
+    }
   }
 
   // Map management.
   std::vector<int> removals;
-  returning_.clear();
+  restarts_.clear();
   if (ela_) {
     for (std::size_t i = 0; i < matches.size(); ++i) {
-      if (!moving[i]) continue;
-      const auto [d, s] = matches[i];
-      ++flagged_observations_;
-      removals.push_back(s);
-      StartMovingTrack(detections[d], slots_[s].track_id, slots_[s].landmark_id);
+      if (moving[i]) Restart(matches[i].second, detections[matches[i].first], &removals);
     }
     HandleLeftovers(detections, &det_used, slot_done, &removals);
     for (const int s : removals) slot_done[s] = 1;
   }
   const int drop_after = ela_ ? filter_.ela_drop_unseen_after_frames : filter_.drop_after_misses;
   for (int s = 0; s < num_slots; ++s) {
-    if (slot_done[s] || !ExpectedInView(s)) continue;
+    if (slot_done[s]) continue;
+    // A landmark on probation not seen for drop_after_misses frames is forgotten.
+    if (slots_[s].moving) {
+      if (static_cast<int>(step_ - slots_[s].last_seen_step) >= filter_.drop_after_misses) removals.push_back(s);
+      continue;
+    }
+    if (!ExpectedInView(s)) continue;
     if (++slots_[s].misses >= drop_after) removals.push_back(s);
   }
   // New landmarks are started from the pose before the removals (removals do not change it).
@@ -445,8 +414,8 @@ void EkfSlam::Process(const common::SensorStep& step) {
     }
   }
   RemoveSlots(removals);
-  for (const auto& r : returning_) AddLandmark(r.detection, r.track_id, r.landmark_id);
-  for (const auto& det : fresh) AddLandmark(det, next_track_id_++, det.landmark_id);
+  for (const auto& r : restarts_) AddLandmark(r.detection, r.track_id, r.landmark_id, /*moving=*/true);
+  for (const auto& det : fresh) AddLandmark(det, next_track_id_++, det.landmark_id, /*moving=*/false);
 }
 
 FilterEstimate EkfSlam::Estimate() const {
@@ -455,7 +424,8 @@ FilterEstimate EkfSlam::Estimate() const {
   e.time_s = time_s_;
   e.pose = common::Pose2::FromVector(x_.head<3>());
   e.covariance = p_.topLeftCorner<3, 3>();
-  for (int s = 0; s < NumMapped(); ++s) {
+  // Landmarks on probation are not part of the map: reported as moving and tentative.
+  for (int s = 0; s < NumSlots(); ++s) {
     MapLandmark l;
     l.track_id = slots_[s].track_id;
     l.landmark_id = slots_[s].landmark_id;
@@ -463,21 +433,8 @@ FilterEstimate EkfSlam::Estimate() const {
     l.covariance.setZero();
     l.covariance.topLeftCorner<2, 2>() = p_.block<2, 2>(3 + 2 * s, 3 + 2 * s);
     l.covariance(2, 2) = kUnknownHeadingVar;
+    l.moving = l.tentative = slots_[s].moving;
     l.last_seen_step = slots_[s].last_seen_step;
-    e.landmarks.push_back(l);
-  }
-  // Moving landmarks are not part of the map: reported as moving and tentative.
-  for (const auto& t : moving_) {
-    MapLandmark l;
-    l.track_id = t.track_id;
-    l.landmark_id = t.landmark_id;
-    l.mean << t.position, 0.0;
-    l.covariance.setZero();
-    l.covariance.topLeftCorner<2, 2>() = t.covariance;
-    l.covariance(2, 2) = kUnknownHeadingVar;
-    l.moving = true;
-    l.tentative = true;
-    l.last_seen_step = t.last_seen_step;
     e.landmarks.push_back(l);
   }
   return e;
@@ -486,9 +443,12 @@ FilterEstimate EkfSlam::Estimate() const {
 int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
                             double gate_probability) {
   std::vector<MatchCandidate> own, incoming;
+  std::vector<int> own_slot;  // the map landmarks (not those on probation)
   std::vector<const MapLandmark*> usable;
-  for (int s = 0; s < NumMapped(); ++s) {
+  for (int s = 0; s < NumSlots(); ++s) {
+    if (slots_[s].moving) continue;
     own.push_back({x_.segment<2>(3 + 2 * s), p_.block<2, 2>(3 + 2 * s, 3 + 2 * s), slots_[s].landmark_id});
+    own_slot.push_back(s);
   }
   for (const auto& l : landmarks_in_own_frame) {
     const Eigen::Matrix2d c = l.covariance.topLeftCorner<2, 2>();
@@ -507,7 +467,7 @@ int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_fra
       continue;
     }
     // A position observation of slot j: H = [0 .. I .. 0], H P = P rows j, j+1.
-    const int j = 3 + 2 * match[i];
+    const int j = 3 + 2 * own_slot[match[i]];
     const int n = static_cast<int>(x_.size());
     Eigen::Matrix2d r0 = r;
     if (rule == common::MapFusionRule::kCovarianceIntersection) {
@@ -553,7 +513,8 @@ bool EkfSlam::ApplyMovedNotice(const Eigen::Vector2d& position, const Eigen::Mat
   const double gate = common::ChiSquare2Quantile(gate_probability);
   int best = -1;
   double best_d2 = gate;
-  for (int s = 0; s < NumMapped(); ++s) {
+  for (int s = 0; s < NumSlots(); ++s) {
+    if (slots_[s].moving) continue;
     const auto d2 = common::MahalanobisSquared<2>(Eigen::Vector2d(x_.segment<2>(3 + 2 * s) - position),
                                                   Eigen::Matrix2d(p_.block<2, 2>(3 + 2 * s, 3 + 2 * s) + cov));
     if (d2 && *d2 <= best_d2) {

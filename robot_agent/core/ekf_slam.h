@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -19,7 +20,7 @@ namespace mrslam::robot_agent {
 // Classic EKF-SLAM (filter.type ekf) and EKF-SLAM with paper B's expected-landmark-area test
 // (filter.type ekf_ela). Owns the joint Gaussian over
 //   x = (x_R, y_R, phi_R, m_1x, m_1y, ..., m_nx, m_ny)      (static landmark model)
-// in the agent's own frame, and for ekf_ela the landmarks currently found moving (outside x).
+// in the agent's own frame; for ekf_ela some of the m are on probation (found moving, see 6).
 //
 // One step (Process):
 //  1. Prediction per odometry segment (v, w, dt), the unicycle of DESIGN.md:
@@ -29,10 +30,11 @@ namespace mrslam::robot_agent {
 //  2. Association: h(R, m) = (|m - p_R|, atan2(m_y - y_R, m_x - x_R) - phi_R), innovation
 //     nu = z - h (bearing wrapped), S = H P H^T + R with H = [H_R 0 .. H_m .. 0]. Pairs with
 //     d2 = nu^T S^-1 nu <= chi2_2(gate_probability) are matched greedily by increasing d2 (each
-//     detection and each landmark at most once; reported identities decide when present). An
-//     unmatched detection beyond chi2_2(new_landmark_probability) of every landmark starts one.
-//  3. (ekf_ela) the ELA test (ela.h) over the matched landmarks; the moving ones are not used
-//     for correction.
+//     detection and each landmark at most once; reported identities decide when present; ekf_ela:
+//     the map landmarks before those on probation). An unmatched detection beyond
+//     chi2_2(new_landmark_probability) of every landmark starts one.
+//  3. (ekf_ela) the ELA test (ela.h) over the matched landmarks, those on probation tested
+//     against the map landmarks; the moving ones are not used for correction.
 //  4. Update, one detection at a time, in Joseph form with the sparse H:
 //       K = P H^T S^-1,  A = (I - K H) P = P - K (H P),
 //       P = A (I - K H)^T + K R K^T = A - (A H^T) K^T + K R K^T   (O(n^2)), then symmetrized.
@@ -40,18 +42,20 @@ namespace mrslam::robot_agent {
 //       P_mm = G_R P_RR G_R^T + G_z R G_z^T,  P_mX = G_R P_RX.
 //  6. Map management. ekf: a landmark expected in view (predicted inside the sensor's reach by
 //     a 3-sigma margin) but not matched drop_after_misses frames in a row is removed.
-//     ekf_ela (paper B's Algorithm 1): a moving landmark is marginalized out of x (its rows and
-//     columns removed: its old information leaves the map) and kept as a moving track at its
-//     observed position (reported with moving = tentative = true, i.e. not part of the map);
-//     an expected but unmatched landmark that a leftover detection explains by motion (within
-//     the gate after growing its covariance by (max_landmark_speed dt n)^2 per axis, n = frames
-//     since last seen, at most 2) moved too; a landmark expected in view and not seen at all is
+//     ekf_ela (paper B's Algorithm 1): a landmark found moving has its old information removed
+//     (its rows and columns marginalized out of x) and is re-initialized at its observed position
+//     by step 5, on probation: it stays in x (so its cross-covariance with the pose is kept) but
+//     is not used for correction and is reported with moving = tentative = true (not part of the
+//     map). Each frame it is seen, the ELA test checks it against the pose and the map landmarks
+//     seen with it: outside, it is re-initialized again; inside for ela_return_after_frames frames,
+//     it is back in the map. An expected but unmatched map landmark (or an unmatched one on
+//     probation) that a leftover detection explains by motion (within the gate once a motion of
+//     up to max_landmark_speed dt n is taken off the residual, n = frames since last seen, at
+//     most 2 for a map landmark) moved too; a map landmark expected in view and not seen at all is
 //     deleted after ela_drop_unseen_after_frames such frames. (Paper B's Algorithm 1 deletes the
 //     landmarks expected to be sensed only in a frame without detections; with a dense field
-//     there always are some, so the rule is applied per landmark; 1 = at once.) A moving
-//     track is re-initialized at each sighting; once its sightings have stayed within its own
-//     ELA gate of its anchor (the first of them) for ela_return_after_frames frames it
-//     re-enters x by step 5; one not seen for drop_after_misses frames is forgotten.
+//     there always are some, so the rule is applied per landmark; 1 = at once.) One on probation
+//     not seen for drop_after_misses frames is forgotten.
 //
 // Not thread-safe; pure (no DDS, no wall clock).
 class EkfSlam : public SlamFilter {
@@ -76,9 +80,11 @@ class EkfSlam : public SlamFilter {
   // within the chi-square gate (position covariance plus cov) is removed. Returns true if one was.
   bool ApplyMovedNotice(const Eigen::Vector2d& position, const Eigen::Matrix2d& cov, double gate_probability) override;
 
-  // Introspection for tests.
-  int NumMapped() const { return static_cast<int>(slots_.size()); }
-  int NumMoving() const { return static_cast<int>(moving_.size()); }
+  // Introspection for tests: landmarks in the map, and on probation (ekf_ela).
+  int NumMapped() const { return NumSlots() - NumMoving(); }
+  int NumMoving() const {
+    return static_cast<int>(std::count_if(slots_.begin(), slots_.end(), [](const Slot& s) { return s.moving; }));
+  }
   const Eigen::VectorXd& State() const { return x_; }
   const Eigen::MatrixXd& Covariance() const { return p_; }
   // Counts over the run: matched observations of mapped landmarks, and those the ELA flagged.
@@ -100,35 +106,27 @@ class EkfSlam : public SlamFilter {
     int landmark_id = -1;
     std::uint32_t last_seen_step = 0;
     int misses = 0;
-  };
-  // A landmark found moving (ekf_ela), outside the joint state.
-  struct MovingTrack {
-    std::uint32_t track_id = 0;
-    int landmark_id = -1;
-    Eigen::Vector2d position = Eigen::Vector2d::Zero();
-    Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
-    Eigen::Vector2d anchor = Eigen::Vector2d::Zero();
-    Eigen::Matrix2d anchor_covariance = Eigen::Matrix2d::Identity();
-    int stay_frames = 0;
-    std::uint32_t last_seen_step = 0;
+    bool moving = false;  // on probation (ekf_ela, step 6)
+    int stay_frames = 0;  // frames on probation within its area
   };
   struct Detection {
     double range_m = 0.0;
     double bearing_rad = 0.0;
     int landmark_id = -1;
   };
-  // A moving track that stayed put and re-enters the map at the end of the step.
-  struct Returning {
+  // A landmark found moving, re-initialized on probation at the end of the step.
+  struct Restarting {
     Detection detection;
     std::uint32_t track_id = 0;
     int landmark_id = -1;
   };
 
+  int NumSlots() const { return static_cast<int>(slots_.size()); }
   void Predict(const common::SensorStep& step);
   // d2 and innovation covariance of detection det against slot s.
   double AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_out = nullptr) const;
-  // Appends a landmark from detection det (step 5).
-  void AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id);
+  // Appends a landmark from detection det (step 5), on probation if moving.
+  void AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, bool moving);
   // Appends a landmark given as N(mean, cov), uncorrelated with x.
   void AppendIndependent(const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov, std::uint32_t track_id,
                          int landmark_id);
@@ -137,10 +135,12 @@ class EkfSlam : public SlamFilter {
   // The observed point g(R, z) and its covariance through the pose (no cross terms with m).
   void SightPoint(const Detection& det, Eigen::Vector2d* point, Eigen::Matrix2d* cov) const;
   bool ExpectedInView(int s) const;
-  // ekf_ela, step 6 for the detections left over after association and the moving tracks.
+  // ekf_ela, step 6 for the detections left over after association and the unmatched slots.
   void HandleLeftovers(const std::vector<Detection>& detections, std::vector<std::uint8_t>* det_used,
-                       const std::vector<std::uint8_t>& slot_matched, std::vector<int>* removals);
-  void StartMovingTrack(const Detection& det, std::uint32_t track_id, int landmark_id);
+                       const std::vector<std::uint8_t>& slot_done, std::vector<int>* removals);
+  // ekf_ela: slot s, seen at det, moved: it is removed and re-initialized on probation at the end
+  // of the step; a map landmark's move is noted for the peers.
+  void Restart(int s, const Detection& det, std::vector<int>* removals);
 
   const common::FilterOptions filter_;
   const common::LidarOptions lidar_;
@@ -155,9 +155,8 @@ class EkfSlam : public SlamFilter {
   Eigen::VectorXd x_;
   Eigen::MatrixXd p_;
   std::vector<Slot> slots_;
-  std::vector<MovingTrack> moving_;
   std::vector<MovedLandmark> moved_;
-  std::vector<Returning> returning_;
+  std::vector<Restarting> restarts_;
   std::uint32_t step_ = 0;
   double time_s_ = 0.0;
   std::uint32_t next_track_id_ = 1;

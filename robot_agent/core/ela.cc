@@ -94,30 +94,35 @@ ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std:
     return std::isfinite(d2) ? d2 : 0.0;
   };
 
-  // Pairwise conflicts: d_ij alone beyond the gate.
+  // Pairwise conflicts between references: d_ij alone beyond the gate.
   Eigen::MatrixXi conflict = Eigen::MatrixXi::Zero(k, k);
   for (int i = 0; i < k; ++i) {
     for (int j = i + 1; j < k; ++j) {
+      if (!observations[i].reference || !observations[j].reference) continue;
       conflict(i, j) = conflict(j, i) = statistic(i, {j}, /*with_pose=*/false) > gate_d2 ? 1 : 0;
     }
   }
-  std::vector<bool> active(k, true);
+  // The references still predicting (active, not flagged), without i.
+  std::vector<bool> active(k);
+  for (int i = 0; i < k; ++i) active[i] = observations[i].reference;
+  auto standing = [&](int i) {
+    std::vector<int> others;
+    for (int j = 0; j < k; ++j) {
+      if (j != i && active[j]) others.push_back(j);
+    }
+    return others;
+  };
   for (;;) {
-    // Among the observations outside their area, the one in conflict with the most others still
+    // Among the references outside their area, the one in conflict with the most others still
     // active stops predicting (ties: the larger d2): the majority of a consistent network
     // decides, not whichever mover happens to pull the combined area furthest.
     int worst = -1, worst_conflicts = -1;
     double worst_d2 = 0.0;
     for (int i = 0; i < k; ++i) {
       if (!active[i]) continue;
-      std::vector<int> others;
+      const std::vector<int> others = standing(i);
       int conflicts = 0;
-      for (int j = 0; j < k; ++j) {
-        if (j != i && active[j]) {
-          others.push_back(j);
-          conflicts += conflict(i, j);
-        }
-      }
+      for (const int j : others) conflicts += conflict(i, j);
       const double d2 = statistic(i, others, /*with_pose=*/true);
       result.d2[i] = d2;
       if (d2 <= gate_d2) continue;
@@ -130,6 +135,11 @@ ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std:
     if (worst < 0) break;
     result.moving[worst] = true;
     active[worst] = false;
+  }
+  for (int i = 0; i < k; ++i) {
+    if (observations[i].reference) continue;
+    result.d2[i] = statistic(i, standing(i), /*with_pose=*/true);
+    result.moving[i] = result.d2[i] > gate_d2;
   }
   return result;
 }

@@ -8,12 +8,15 @@
 // the reading of papers/NOTES.md): which of the mapped landmarks observed in one frame moved?
 namespace mrslam::robot_agent {
 
-// One observation of a mapped landmark: its slot in the joint EKF state (position at
-// x(3 + 2 slot), x(4 + 2 slot)) and the range-bearing measurement.
+// One observation of a landmark in the joint EKF state: its slot (position at x(3 + 2 slot),
+// x(4 + 2 slot)), the range-bearing measurement, and whether the landmark is a reference (a map
+// landmark believed static: it predicts the others' areas) or on probation (re-initialized after
+// it moved: it is tested against the references and predicts nothing).
 struct ElaObservation {
   int slot = 0;
   double range_m = 0.0;
   double bearing_rad = 0.0;
+  bool reference = true;
 };
 
 // The outcome per observation (same order as the input).
@@ -46,6 +49,8 @@ struct ElaResult {
 // in pairwise conflict (d_ij alone beyond the gate) with the most others still in the round
 // (ties: the largest d2) is flagged moving and stops predicting; the rounds end when none is
 // above. So a static landmark among many movers is judged by the landmarks consistent with it.
+// Observations on probation take part in no round: each is tested once, at the end, against the
+// references left standing.
 ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std::vector<ElaObservation>& observations,
                   double var_r, double var_b, double gate_d2);
 

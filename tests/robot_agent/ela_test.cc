@@ -1,8 +1,9 @@
 // Paper B's expected-landmark-area test: on a hand-built joint state (a landmark that jumped
-// beyond its gate is flagged, the others kept, alone or among others), in the ekf_ela filter (a
-// landmark that jumps is taken out of the map while its neighbours stay; it returns after
-// staying put), and in a static world (dynamic_world with moving_fraction 0: under 1 % of the
-// observations flagged, landmark RMSE within 5 % of the plain EKF's).
+// beyond its gate is flagged, the others kept, alone or among others; one on probation is tested
+// and predicts nothing), in the ekf_ela filter (a landmark that jumps is taken out of the map
+// while its neighbours stay; it returns after staying put), and in a static world (dynamic_world
+// with moving_fraction 0: under 1 % of the observations flagged, landmark RMSE at most 5 % above
+// the plain EKF's, robot RMSE within 5 % of it).
 #include "robot_agent/core/ela.h"
 
 #include <cmath>
@@ -86,6 +87,28 @@ TEST(ElaTest, KeepsLandmarksThatStayPut) {
   EXPECT_LT(static_cast<double>(flagged) / tested, 0.01);
 }
 
+// An observation on probation (reference = false) is flagged when it moved and kept when it
+// stayed, and leaves the references' statistics exactly as without it.
+TEST(ElaTest, ProbationLandmarkIsTestedAndPredictsNothing) {
+  common::Rng rng(7, "ela");
+  const std::vector<Eigen::Vector2d> map = {{2.0, 1.0}, {-1.5, 2.5}, {3.0, -2.0}, {-2.0, -3.0}, {0.5, 4.0}};
+  for (int trial = 0; trial < 100; ++trial) {
+    std::vector<Eigen::Vector2d> now = map;
+    const bool jumped = trial % 2 == 0;
+    if (jumped) now[0] += Eigen::Vector2d(std::cos(trial), std::sin(trial)) * 1.0;
+    Scene s = MakeScene(map, now, &rng);
+    s.obs[0].reference = false;
+    const ElaResult with = ElaTest(s.x, s.p, s.obs, kVarR, kVarB, kGate);
+    EXPECT_EQ(with.moving[0], jumped) << "trial " << trial;
+    const std::vector<ElaObservation> references(s.obs.begin() + 1, s.obs.end());
+    const ElaResult without = ElaTest(s.x, s.p, references, kVarR, kVarB, kGate);
+    for (int i = 1; i < 5; ++i) {
+      EXPECT_EQ(with.moving[i], without.moving[i - 1]) << "trial " << trial << " landmark " << i;
+      EXPECT_NEAR(with.d2[i], without.d2[i - 1], 1e-9) << "trial " << trial << " landmark " << i;
+    }
+  }
+}
+
 TEST(ElaTest, SingleLandmarkIsTestedThroughThePose) {
   common::Rng rng(8, "ela");
   const std::vector<Eigen::Vector2d> map = {{2.0, 1.0}};
@@ -103,6 +126,7 @@ TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
   o.run.dt_s = 1.0;
   o.filter.type = "ekf_ela";
   o.filter.ela_return_after_frames = 5;
+  o.filter.max_landmark_speed_mps = 2.0;  // the 1.5 m jump is within a frame's reach of motion
   o.noise.robot_process_var = Eigen::Vector3d(1e-4, 1e-4, 1e-4);
   std::vector<Eigen::Vector2d> landmarks = {{2.0, 2.0}, {-2.0, 3.0}, {3.0, -2.0}, {-3.0, -2.0}, {0.0, 4.0}, {4.0, 0.5}};
   EkfSlam ekf(o, "r1", /*ela=*/true);
@@ -156,10 +180,12 @@ TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
   EXPECT_LT((ekf.Estimate().pose.Translation() - robot.Translation()).norm(), 0.3);
 }
 
-// Per paper B's eqs. 17-18 (mean over frames of the per-frame RMSE over the map), averaged over
-// the robots; also counts observations and flags.
+// Landmark RMSE per paper B's eqs. 17-18 (mean over frames of the per-frame RMSE over the map)
+// and robot position RMSE over the frames, each averaged over the robots; also counts
+// observations and flags.
 struct StaticRun {
   double landmark_rmse = 0.0;
+  double robot_rmse = 0.0;
   std::int64_t matched = 0, flagged = 0;
 };
 StaticRun RunStatic(const common::ScenarioOptions& base, const std::string& filter, std::uint64_t seed) {
@@ -169,7 +195,7 @@ StaticRun RunStatic(const common::ScenarioOptions& base, const std::string& filt
   world_sim::World world(o);
   std::vector<std::unique_ptr<EkfSlam>> filters;
   for (const auto& r : o.robots) filters.push_back(std::make_unique<EkfSlam>(o, r.id, filter == "ekf_ela"));
-  std::vector<double> sums(o.robots.size(), 0.0);
+  std::vector<double> sums(o.robots.size(), 0.0), position_sq(o.robots.size(), 0.0);
   std::vector<int> frames(o.robots.size(), 0);
   for (int k = 0; k < o.run.steps; ++k) {
     const auto steps = world.Step();
@@ -178,8 +204,12 @@ StaticRun RunStatic(const common::ScenarioOptions& base, const std::string& filt
     for (const auto& l : truth.landmarks) true_points.push_back({l.pose.Translation(), std::stoi(l.id)});
     for (std::size_t i = 0; i < filters.size(); ++i) {
       filters[i]->Process(steps[i]);
+      const FilterEstimate estimate = filters[i]->Estimate();
+      const double position_error = evaluator::PositionError(
+          estimate.pose, evaluator::TruthInOwnFrame(truth.robots[i].pose, o.robots[i].frame_in_world));
+      position_sq[i] += position_error * position_error;
       std::vector<evaluator::MapPoint> map;
-      for (const auto& l : filters[i]->Estimate().landmarks) {
+      for (const auto& l : estimate.landmarks) {
         if (!l.tentative) map.push_back({l.mean.head<2>(), l.landmark_id});
       }
       if (map.empty()) continue;
@@ -193,6 +223,7 @@ StaticRun RunStatic(const common::ScenarioOptions& base, const std::string& filt
   StaticRun out;
   for (std::size_t i = 0; i < filters.size(); ++i) {
     out.landmark_rmse += sums[i] / std::max(1, frames[i]) / filters.size();
+    out.robot_rmse += std::sqrt(position_sq[i] / o.run.steps) / filters.size();
     out.matched += filters[i]->MatchedObservations();
     out.flagged += filters[i]->FlaggedObservations();
   }
@@ -202,7 +233,7 @@ StaticRun RunStatic(const common::ScenarioOptions& base, const std::string& filt
 TEST(ElaTest, StaticWorldFlagsFewAndMatchesPlainEkf) {
   const common::ScenarioOptions o =
       common::LoadScenario(SourceDir() + "/config/dynamic_world.yaml", {"landmark_field.moving_fraction=0.0"});
-  double ekf_rmse = 0.0, ela_rmse = 0.0;
+  double ekf_rmse = 0.0, ela_rmse = 0.0, ekf_robot_rmse = 0.0, ela_robot_rmse = 0.0;
   std::int64_t matched = 0, flagged = 0;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
     const StaticRun plain = RunStatic(o, "ekf", seed);
@@ -210,6 +241,8 @@ TEST(ElaTest, StaticWorldFlagsFewAndMatchesPlainEkf) {
     EXPECT_EQ(plain.flagged, 0);
     ekf_rmse += plain.landmark_rmse;
     ela_rmse += ela.landmark_rmse;
+    ekf_robot_rmse += plain.robot_rmse;
+    ela_robot_rmse += ela.robot_rmse;
     matched += ela.matched;
     flagged += ela.flagged;
   }
@@ -220,6 +253,9 @@ TEST(ElaTest, StaticWorldFlagsFewAndMatchesPlainEkf) {
   EXPECT_LT(static_cast<double>(flagged) / static_cast<double>(matched), 0.01)
       << flagged << " of " << matched << " observations flagged";
   EXPECT_LE(ela_rmse, 1.05 * ekf_rmse) << "ekf_ela " << ela_rmse / 4 << " m, ekf " << ekf_rmse / 4 << " m";
+  // The robot's RMSE both ways: where nothing moves the ELA neither costs nor gains.
+  EXPECT_NEAR(ela_robot_rmse / ekf_robot_rmse, 1.0, 0.05)
+      << "ekf_ela " << ela_robot_rmse / 4 << " m, ekf " << ekf_robot_rmse / 4 << " m";
 }
 
 }  // namespace
