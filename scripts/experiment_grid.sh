@@ -3,7 +3,7 @@
 # in-process: World + one filter per robot, no DDS) on config/dynamic_world.yaml for dynamism
 # 5..80 % x speed 0.1..0.9 m/s x N runs x 150 frames, filters ekf, ekf_ela and fastslam, then
 # plots the heat maps. Writes DIR/grid.csv, DIR/tables.md and DIR/plots/grid_*.png.
-# Usage: scripts/experiment_grid.sh --out DIR [--runs N] [more mrslam_grid flags]
+# Usage: scripts/experiment_grid.sh --out DIR [--runs N] [more mrslam_grid flags, e.g. --multi-process]
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${MRSLAM_BUILD_DIR:-$root/build}

@@ -1,4 +1,6 @@
-// mrslam_grid: paper B's experiment grid, in-process (World + one filter per robot, no DDS).
+// mrslam_grid: paper B's experiment grid, in-process (World + one filter per robot, no DDS), or
+// with --multi-process as separate processes (world_sim + one robot_agent per robot over DDS,
+// one run at a time; the same seeds and the same scoring).
 // For every filter, dynamism (landmark_field.moving_fraction), speed (landmark_field.speed_mps)
 // and run (seed 1..N) it runs the scenario for the given frames and writes one row to
 // OUT/grid.csv, then OUT/tables.md (paper B's layout: rows dynamism, columns speed; means over
@@ -14,7 +16,9 @@
 //     the robot at some frame, the share that stands in its map at the end (MatchedTruth).
 //
 //   mrslam_grid --scenario FILE --out DIR [--runs N] [--frames K] [--threads T]
-//               [--particles P] [--filters ekf,ekf_ela,fastslam] [--set k=v]...
+//               [--particles P] [--filters ekf,ekf_ela,fastslam] [--set k=v]... [--multi-process]
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -25,6 +29,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <stdexcept>
@@ -35,7 +40,13 @@
 #include <CLI/CLI.hpp>
 
 #include "common/config/scenario_options.h"
+#include "common/dds/msg_conversion.h"
+#include "common/dds/participant.h"
+#include "mrslamPubSubTypes.h"
 #include "robot_agent/core/slam_filter.h"
+#include "robot_agent/node/msg_conversion.h"
+#include "scripts/launch/domain_picker.h"
+#include "scripts/launch/process_supervisor.h"
 #include "world_sim/core/world.h"
 #include "world_sim/evaluator/metrics.h"
 
@@ -78,83 +89,220 @@ double Mean(const std::vector<double>& v) {
   return n > 0 ? s / n : std::nan("");
 }
 
-Row RunJob(common::ScenarioOptions options, const Job& job, int frames) {
-  const auto start = std::chrono::steady_clock::now();
+// A job's scenario: the base with the job's filter, cell, seed and frames.
+common::ScenarioOptions JobOptions(common::ScenarioOptions options, const Job& job, int frames) {
   options.seed = static_cast<std::uint64_t>(job.run);
   options.run.steps = frames;
   options.filter.type = job.filter;
   options.landmark_field.moving_fraction = kDynamism[job.dynamism_index];
   options.landmark_field.speed_mps = kSpeeds[job.speed_index];
+  return options;
+}
+
+// Accumulates one run's metrics frame by frame (the definitions at the top of this file).
+class RunScorer {
+ public:
+  explicit RunScorer(const common::ScenarioOptions& options)
+      : options_(options), n_(options.robots.size()), frame_rmse_(n_), position_sq_(n_), reached_(n_), last_map_(n_) {}
+
+  // One frame: the truth and each robot's estimate, in scenario order.
+  void AddFrame(const common::GroundTruth& truth, const std::vector<robot_agent::FilterEstimate>& estimates) {
+    true_landmarks_.clear();
+    is_static_.clear();
+    for (const auto& l : truth.landmarks) {
+      true_landmarks_.push_back({l.pose.Translation(), std::stoi(l.id)});
+      is_static_.push_back(!l.moving);
+    }
+    for (std::size_t i = 0; i < n_; ++i) {
+      const common::Pose2& frame = options_.robots[i].frame_in_world;
+      const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
+      const robot_agent::FilterEstimate& e = estimates[i];
+      const double pe = evaluator::PositionError(e.pose, truth_own);
+      position_sq_[i].push_back(pe * pe);
+      std::vector<evaluator::MapPoint>& map = last_map_[i];
+      map.clear();
+      for (const auto& l : e.landmarks) {
+        all_reported_ += 1.0;
+        if (l.moving) moving_reported_ += 1.0;
+        if (!l.tentative) map.push_back({l.mean.head<2>(), l.landmark_id});
+      }
+      if (!map.empty()) {
+        const std::vector<double> errors = evaluator::LandmarkErrors(map, true_landmarks_, frame);
+        double sq = 0.0;
+        for (const double err : errors) sq += err * err;
+        frame_rmse_[i].push_back(std::sqrt(sq / static_cast<double>(errors.size())));
+      }
+      reached_[i].resize(truth.landmarks.size(), 0);
+      const Eigen::Vector2d robot_xy = truth.robots[i].pose.Translation();
+      for (std::size_t l = 0; l < truth.landmarks.size(); ++l) {
+        if ((true_landmarks_[l].position_m - robot_xy).norm() <= options_.sensors.lidar.max_range_m) {
+          reached_[i][l] = 1;
+        }
+      }
+    }
+  }
+
+  Row Finish(double seconds) const {
+    Row row;
+    for (std::size_t i = 0; i < n_; ++i) {
+      row.robot_landmark_rmse_m.push_back(Mean(frame_rmse_[i]));
+      row.robot_rmse_per_robot_m.push_back(std::sqrt(Mean(position_sq_[i])));
+      const std::vector<int> matched =
+          evaluator::MatchedTruth(last_map_[i], true_landmarks_, options_.robots[i].frame_in_world);
+      int reach = 0, kept = 0;
+      for (std::size_t l = 0; l < true_landmarks_.size(); ++l) {
+        if (!is_static_[l] || !reached_[i][l]) continue;
+        ++reach;
+        if (std::binary_search(matched.begin(), matched.end(), static_cast<int>(l))) ++kept;
+      }
+      row.robot_completeness.push_back(reach > 0 ? static_cast<double>(kept) / reach : std::nan(""));
+      row.mapped_at_end += static_cast<double>(last_map_[i].size()) / static_cast<double>(n_);
+    }
+    row.landmark_rmse_m = Mean(row.robot_landmark_rmse_m);
+    row.robot_rmse_m = Mean(row.robot_rmse_per_robot_m);
+    row.static_completeness = Mean(row.robot_completeness);
+    row.moving_flag_share = all_reported_ > 0.0 ? moving_reported_ / all_reported_ : 0.0;
+    row.seconds = seconds;
+    return row;
+  }
+
+ private:
+  const common::ScenarioOptions& options_;
+  std::size_t n_;
+  std::vector<std::vector<double>> frame_rmse_, position_sq_;
+  std::vector<std::vector<std::uint8_t>> reached_;
+  std::vector<std::vector<evaluator::MapPoint>> last_map_;
+  double moving_reported_ = 0.0, all_reported_ = 0.0;
+  std::vector<evaluator::TruePoint> true_landmarks_;
+  std::vector<bool> is_static_;
+};
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// One job in-process: World + one filter per robot.
+Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
+  const auto start = std::chrono::steady_clock::now();
+  const common::ScenarioOptions options = JobOptions(base, job, frames);
   world_sim::World world(options);
-  const std::size_t n = options.robots.size();
   std::vector<std::unique_ptr<robot_agent::SlamFilter>> filters;
   for (const auto& robot : options.robots) {
     filters.push_back(robot_agent::CreateFilter(options, robot.id, options.seed));
     if (!filters.back()) throw std::runtime_error("filter.type " + job.filter + " is not implemented");
   }
-  std::vector<std::vector<double>> frame_rmse(n), position_sq(n);
-  std::vector<std::vector<std::uint8_t>> reached(n);
-  std::vector<std::vector<evaluator::MapPoint>> last_map(n);
-  double moving_reported = 0.0, all_reported = 0.0;
-  std::vector<evaluator::TruePoint> true_landmarks;
-  std::vector<bool> is_static;
+  RunScorer scorer(options);
+  std::vector<robot_agent::FilterEstimate> estimates(filters.size());
   for (int k = 0; k < frames; ++k) {
     const std::vector<common::SensorStep> steps = world.Step();
-    const common::GroundTruth truth = world.Truth();
-    true_landmarks.clear();
-    is_static.clear();
-    for (const auto& l : truth.landmarks) {
-      true_landmarks.push_back({l.pose.Translation(), std::stoi(l.id)});
-      is_static.push_back(!l.moving);
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      const common::Pose2& frame = options.robots[i].frame_in_world;
-      const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
+    for (std::size_t i = 0; i < filters.size(); ++i) {
       filters[i]->Process(steps[i]);
-      const robot_agent::FilterEstimate e = filters[i]->Estimate();
-      const double pe = evaluator::PositionError(e.pose, truth_own);
-      position_sq[i].push_back(pe * pe);
-      std::vector<evaluator::MapPoint>& map = last_map[i];
-      map.clear();
-      for (const auto& l : e.landmarks) {
-        all_reported += 1.0;
-        if (l.moving) moving_reported += 1.0;
-        if (!l.tentative) map.push_back({l.mean.head<2>(), l.landmark_id});
-      }
-      if (!map.empty()) {
-        const std::vector<double> errors = evaluator::LandmarkErrors(map, true_landmarks, frame);
-        double sq = 0.0;
-        for (const double err : errors) sq += err * err;
-        frame_rmse[i].push_back(std::sqrt(sq / static_cast<double>(errors.size())));
-      }
-      reached[i].resize(truth.landmarks.size(), 0);
-      const Eigen::Vector2d robot_xy = truth.robots[i].pose.Translation();
-      for (std::size_t l = 0; l < truth.landmarks.size(); ++l) {
-        if ((true_landmarks[l].position_m - robot_xy).norm() <= options.sensors.lidar.max_range_m) reached[i][l] = 1;
+      estimates[i] = filters[i]->Estimate();
+    }
+    scorer.AddFrame(world.Truth(), estimates);
+  }
+  return scorer.Finish(SecondsSince(start));
+}
+
+// What the processes of a multi-process job get besides the job's own settings.
+struct MultiProcessSetup {
+  std::string scenario_path;
+  std::vector<std::string> overrides;  // the user's --set, then the grid's own
+  std::string log_dir;
+};
+
+// One job as separate processes: world_sim and one robot_agent per robot on a free DDS domain,
+// in lockstep; this process reads the truth and the estimates over DDS and scores them like an
+// in-process run.
+Row RunJobMultiProcess(const common::ScenarioOptions& base, const MultiProcessSetup& setup, const Job& job,
+                       int frames) {
+  const auto start = std::chrono::steady_clock::now();
+  const common::ScenarioOptions options = JobOptions(base, job, frames);
+  const int domain = launch::PickFreeDomain(getpid());
+  if (domain < 0) throw std::runtime_error("no free DDS domain");
+  dds::Participant participant({domain, "mrslam_grid", false});
+  dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic);
+  std::vector<std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimate_readers;
+  for (const auto& robot : options.robots) {
+    estimate_readers.push_back(
+        std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(robot.id)));
+  }
+
+  std::vector<std::string> args = {"--scenario", setup.scenario_path,    "--domain", std::to_string(domain),
+                                   "--seed",     std::to_string(job.run)};
+  std::vector<std::string> sets = setup.overrides;
+  sets.push_back("filter.type=" + job.filter);
+  sets.push_back("landmark_field.moving_fraction=" + std::to_string(kDynamism[job.dynamism_index]));
+  sets.push_back("landmark_field.speed_mps=" + std::to_string(kSpeeds[job.speed_index]));
+  sets.push_back("run.steps=" + std::to_string(frames));
+  for (const auto& o : sets) args.insert(args.end(), {"--set", o});
+  const std::string bin = launch::ExecutableDir();
+  const std::string logs = setup.log_dir + "/" + job.filter + "-d" + std::to_string(job.dynamism_index) + "-s" +
+                           std::to_string(job.speed_index) + "-run" + std::to_string(job.run) + "-";
+  launch::ProcessSupervisor children;
+  auto command = [&](const std::string& exe, const std::vector<std::string>& more) {
+    std::vector<std::string> argv = {bin + "/" + exe};
+    argv.insert(argv.end(), args.begin(), args.end());
+    argv.insert(argv.end(), more.begin(), more.end());
+    return argv;
+  };
+  for (const auto& robot : options.robots) {
+    children.Start(robot.id, command("robot_agent", {"--robot", robot.id, "--wait-readers", "1"}),
+                   logs + robot.id + ".log");
+  }
+  children.Start("world_sim", command("world_sim", {"--wait-readers", "1"}), logs + "world_sim.log");
+
+  std::map<std::uint32_t, common::GroundTruth> truth;
+  std::vector<std::map<std::uint32_t, robot_agent::FilterEstimate>> estimates(options.robots.size());
+  const auto drain = [&](std::chrono::milliseconds wait) {
+    bool any = false;
+    msg::GroundTruth t;
+    while (truth_reader.Take(&t, wait)) {
+      truth[t.stamp().step()] = dds::FromMsg(t);
+      any = true;
+    }
+    for (std::size_t i = 0; i < estimate_readers.size(); ++i) {
+      msg::Estimate e;
+      while (estimate_readers[i]->TryTake(&e)) {
+        estimates[i][e.stamp().step()] = robot_agent::FromMsg(e);
+        any = true;
       }
     }
-  }
-  Row row;
-  for (std::size_t i = 0; i < n; ++i) {
-    row.robot_landmark_rmse_m.push_back(Mean(frame_rmse[i]));
-    row.robot_rmse_per_robot_m.push_back(std::sqrt(Mean(position_sq[i])));
-    const std::vector<int> matched =
-        evaluator::MatchedTruth(last_map[i], true_landmarks, options.robots[i].frame_in_world);
-    int reach = 0, kept = 0;
-    for (std::size_t l = 0; l < true_landmarks.size(); ++l) {
-      if (!is_static[l] || !reached[i][l]) continue;
-      ++reach;
-      if (std::binary_search(matched.begin(), matched.end(), static_cast<int>(l))) ++kept;
+    return any;
+  };
+  const auto deadline = start + std::chrono::seconds(60 + frames);
+  while (children.running() > 0) {
+    drain(std::chrono::milliseconds(20));
+    for (const launch::ChildExit& exit : children.Reap()) {
+      if (!exit.ok()) {
+        children.StopAll(std::chrono::seconds(2));
+        throw std::runtime_error(exit.name + " " + exit.Describe() + "; log: " + exit.log_path);
+      }
     }
-    row.robot_completeness.push_back(reach > 0 ? static_cast<double>(kept) / reach : std::nan(""));
-    row.mapped_at_end += static_cast<double>(last_map[i].size()) / static_cast<double>(n);
+    if (std::chrono::steady_clock::now() > deadline) {
+      children.StopAll(std::chrono::seconds(2));
+      throw std::runtime_error("a multi-process run took longer than " + std::to_string(60 + frames) +
+                               " s; logs: " + logs + "*.log");
+    }
   }
-  row.landmark_rmse_m = Mean(row.robot_landmark_rmse_m);
-  row.robot_rmse_m = Mean(row.robot_rmse_per_robot_m);
-  row.static_completeness = Mean(row.robot_completeness);
-  row.moving_flag_share = all_reported > 0.0 ? moving_reported / all_reported : 0.0;
-  row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return row;
+  while (drain(std::chrono::milliseconds(300))) {
+  }
+
+  RunScorer scorer(options);
+  std::vector<robot_agent::FilterEstimate> frame(options.robots.size());
+  for (int k = 1; k <= frames; ++k) {
+    const auto step = static_cast<std::uint32_t>(k);
+    if (!truth.count(step)) throw std::runtime_error("no truth for step " + std::to_string(k));
+    for (std::size_t i = 0; i < estimates.size(); ++i) {
+      const auto it = estimates[i].find(step);
+      if (it == estimates[i].end()) {
+        throw std::runtime_error("no estimate of " + options.robots[i].id + " for step " + std::to_string(k));
+      }
+      frame[i] = it->second;
+    }
+    scorer.AddFrame(truth.at(step), frame);
+  }
+  return scorer.Finish(SecondsSince(start));
 }
 
 std::vector<std::string> Split(const std::string& text) {
@@ -285,7 +433,7 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
 }
 
 int Main(int argc, char** argv) {
-  CLI::App app{"Paper B's experiment grid, in-process (World + one filter per robot, no DDS)."};
+  CLI::App app{"Paper B's experiment grid, in-process (World + one filter per robot, no DDS) or multi-process."};
   std::string scenario_path, out_dir, filters_text = "ekf,ekf_ela,fastslam";
   std::vector<std::string> overrides;
   int runs = 10, frames = 150, threads = 2, particles = 100;
@@ -299,6 +447,9 @@ int Main(int argc, char** argv) {
   app.add_option("--dynamism", kDynamism, "Shares of moving landmarks (default paper B's)");
   app.add_option("--speeds", kSpeeds, "Landmark speeds, m/s (default paper B's)");
   app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
+  bool multi_process = false;
+  app.add_flag("--multi-process", multi_process,
+               "Run every job as separate processes (world_sim + robot_agent per robot, over DDS), one at a time");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -313,6 +464,13 @@ int Main(int argc, char** argv) {
     if (f != "ekf" && f != "ekf_ela" && f != "fastslam") throw std::runtime_error("unknown filter '" + f + "'");
   }
   std::filesystem::create_directories(out_dir);
+  MultiProcessSetup setup{scenario_path, overrides, out_dir + "/logs"};
+  setup.overrides.push_back("filter.particles=" + std::to_string(particles));
+  setup.overrides.push_back("filter.landmark_kinematics=constant_turn_rate");
+  if (multi_process) {
+    std::filesystem::create_directories(setup.log_dir);
+    threads = 1;  // each run's processes use every core
+  }
 
   // Jobs cell by cell, so that progress counts finished cells.
   std::vector<Job> jobs;
@@ -337,7 +495,7 @@ int Main(int argc, char** argv) {
     for (int j = next++; j < num_jobs; j = next++) {
       Row row;
       try {
-        row = RunJob(options, jobs[j], frames);
+        row = multi_process ? RunJobMultiProcess(options, setup, jobs[j], frames) : RunJob(options, jobs[j], frames);
       } catch (const std::exception& e) {
         const std::lock_guard<std::mutex> lock(mutex);
         error = e.what();

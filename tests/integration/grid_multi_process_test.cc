@@ -1,0 +1,73 @@
+// The experiment grid's --multi-process mode: the same jobs run as separate processes
+// (world_sim + one robot_agent per robot, over DDS, on a free domain the tool picks) score
+// exactly what the in-process run scores, and the processes leave nothing behind.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "tests/integration/child_process.h"
+
+namespace mrslam {
+namespace {
+
+using std::chrono::seconds;
+using testing::BinPath;
+using testing::ChildProcess;
+using testing::SourcePath;
+
+// The grid's rows without the last column (each run's wall time).
+std::vector<std::string> RowsWithoutSeconds(const std::string& csv) {
+  std::vector<std::string> rows;
+  std::size_t start = 0;
+  while (start < csv.size()) {
+    const std::size_t end = csv.find('\n', start);
+    const std::string line = csv.substr(start, end - start);
+    rows.push_back(line.substr(0, line.rfind(',')));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return rows;
+}
+
+std::string RunGrid(const std::string& out, bool multi_process) {
+  std::vector<std::string> argv = {BinPath("mrslam_grid"),
+                                   "--scenario",
+                                   SourcePath("config/dynamic_world.yaml"),
+                                   "--out",
+                                   out,
+                                   "--runs",
+                                   "2",
+                                   "--frames",
+                                   "40",
+                                   "--dynamism",
+                                   "0.5",
+                                   "--speeds",
+                                   "0.5",
+                                   "--filters",
+                                   "ekf,ekf_ela,fastslam",
+                                   "--particles",
+                                   "50"};
+  if (multi_process) argv.push_back("--multi-process");
+  ChildProcess grid(argv, out + ".log");
+  EXPECT_EQ(grid.WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(out + ".log");
+  return testing::ReadFile(out + "/grid.csv");
+}
+
+TEST(GridMultiProcessTest, ScoresTheSameAsInProcess) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string dir = testing::MakeTempDir("mrslam-grid");
+  const auto in_process = RowsWithoutSeconds(RunGrid(dir + "/in", false));
+  const auto multi_process = RowsWithoutSeconds(RunGrid(dir + "/mp", true));
+  ASSERT_EQ(in_process.size(), 7u);  // header + 3 filters x 2 runs
+  EXPECT_EQ(multi_process, in_process);
+  // Every process's log is there (3 agents and world_sim per run).
+  int logs = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir + "/mp/logs")) logs += entry.is_regular_file();
+  EXPECT_EQ(logs, 6 * 4);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace mrslam
