@@ -354,6 +354,7 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
         f.Get("landmark_turn_rate_prior_sd_radps", d.landmark_turn_rate_prior_sd_radps);
     d.confirm_sightings = f.Get("confirm_sightings", d.confirm_sightings);
     d.drop_after_misses = f.Get("drop_after_misses", d.drop_after_misses);
+    d.max_landmark_position_sd_m = f.Get("max_landmark_position_sd_m", d.max_landmark_position_sd_m);
     d.ela_gate_probability = f.Get("ela_gate_probability", d.ela_gate_probability);
     d.ela_return_after_frames = f.Get("ela_return_after_frames", d.ela_return_after_frames);
     d.ela_drop_unseen_after_frames = f.Get("ela_drop_unseen_after_frames", d.ela_drop_unseen_after_frames);
@@ -573,6 +574,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           f.landmark_turn_rate_prior_sd_radps, "must be positive");
   c.Check(f.confirm_sightings >= 1, "filter.confirm_sightings", f.confirm_sightings, "must be at least 1");
   c.Check(f.drop_after_misses >= 1, "filter.drop_after_misses", f.drop_after_misses, "must be at least 1");
+  c.Check(f.max_landmark_position_sd_m > 0.0, "filter.max_landmark_position_sd_m", f.max_landmark_position_sd_m,
+          "must be positive (.inf: no bound)");
   c.Check(f.ela_gate_probability > 0.0 && f.ela_gate_probability < 1.0, "filter.ela_gate_probability",
           f.ela_gate_probability, "must be in (0, 1)");
   c.Check(f.ela_return_after_frames >= 1, "filter.ela_return_after_frames", f.ela_return_after_frames,

@@ -156,6 +156,10 @@ struct FilterOptions {
   double landmark_turn_rate_prior_sd_radps = 0.5;
   int confirm_sightings = 2;  // tentative until seen this many times
   int drop_after_misses = 5;  // dropped when expected in view but missed this many times
+  // FastSLAM: a landmark whose position standard deviation sqrt(var_x + var_y) grows beyond this
+  // leaves the map, in view or not (an unseen moving landmark predicted by a model it has left);
+  // a peer's landmark beyond it is not merged.
+  double max_landmark_position_sd_m = 2.0;
   // ekf_ela (paper B): chi-square 2 dof gate of the expected-landmark-area test; frames a moving
   // landmark must stay within its own gate before it re-enters the map; frames a mapped landmark
   // may be expected in view and not seen before it is deleted (paper B's Algorithm 1: 1).

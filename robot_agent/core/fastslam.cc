@@ -86,6 +86,7 @@ FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string&
       var_r_(lidar_.range_noise_sd_m * lidar_.range_noise_sd_m),
       var_b_(lidar_.bearing_noise_sd_rad * lidar_.bearing_noise_sd_rad),
       log_new_d2_(common::ChiSquare2Quantile(options.filter.new_landmark_probability)),
+      max_position_var_(options.filter.max_landmark_position_sd_m * options.filter.max_landmark_position_sd_m),
       batch_(var_r_, var_b_),
       rng_(seed, robot_id + "/fastslam"),
       last_ess_(options.filter.particles) {
@@ -521,6 +522,10 @@ void FastSlam<D>::CountMisses(int p) {
   while (s < particle.count) {
     const Block& view = *particle.blocks[s / kLanes];
     const int lane = s % kLanes;
+    if (Lost(view.Cov(0, 0, lane) + view.Cov(1, 1, lane))) {
+      RemoveLandmark(&particle, s);  // the last landmark moves into slot s
+      continue;
+    }
     if (view.meta[lane].last_seen_step == step_ || !InView(particle.pose, view.Mean(0, lane), view.Mean(1, lane))) {
       ++s;
       continue;
@@ -710,7 +715,9 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
         if (meta.landmark_id < 0) meta.landmark_id = peer.landmark_id;
         continue;
       }
-      // Unmatched: a new landmark in this particle, from the peer's estimate.
+      // Unmatched: a new landmark in this particle, from the peer's estimate, unless it is
+      // already too uncertain to keep (it would leave the map at once).
+      if (Lost(peer.covariance(0, 0) + peer.covariance(1, 1))) continue;
       const int slot = particle.count;
       if (slot / kLanes == static_cast<int>(particle.blocks.size())) {
         particle.blocks.push_back(std::make_shared<Block>());

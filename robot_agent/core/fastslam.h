@@ -48,7 +48,11 @@ namespace mrslam::robot_agent {
 //     rate, v = length / elapsed time), with covariances from the first-order propagation of
 //     both sightings. New landmarks start from the inverse sensor model.
 //  6. Landmarks expected in the field of view but not seen drop_after_misses times in a row
-//     are removed; a landmark is tentative until seen confirm_sightings times.
+//     are removed; a landmark is tentative until seen confirm_sightings times. A landmark whose
+//     predicted position standard deviation sqrt(P_xx + P_yy) exceeds max_landmark_position_sd_m
+//     is removed too, in view or not: its estimate no longer says where it is (a moving one
+//     unseen for long, predicted by a model it has left). The same bound applies to merged
+//     landmarks (MergeLandmarks does not add a peer landmark beyond it).
 //  7. Weights are normalized in the log domain; low-variance resampling when
 //     ESS < resample_ess_fraction * N (or every step).
 //
@@ -72,7 +76,8 @@ class FastSlam : public SlamFilter {
   // Map merging (SlamFilter): per particle, incoming landmarks are matched to the particle's
   // (MatchLandmarks: identities, else Mahalanobis on position); a match is fused by rule
   // (FuseObservation on position, plus heading when both have one); the others are added to
-  // every particle under one new track id each, confirmed (the peer confirmed them). Blocks
+  // every particle under one new track id each, confirmed (the peer confirmed them), except those
+  // whose position standard deviation exceeds max_landmark_position_sd_m (step 6). Blocks
   // are written through MutableBlock, so copy-on-write sharing stays intact.
   int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
                      double gate_probability) override;
@@ -126,6 +131,8 @@ class FastSlam : public SlamFilter {
   void RemoveLandmark(Particle* particle, int slot);
   int FindIdentity(const Particle& particle, int landmark_id) const;
   bool InView(const common::Pose2& pose, double x, double y) const;
+  // Whether a landmark of position covariance trace P_xx + P_yy is beyond the bound of step 6.
+  bool Lost(double position_variance) const { return position_variance > max_position_var_; }
   // Position covariance of the point seen at (r, b) from pose: J R J^T.
   Eigen::Matrix2d PointCovariance(const common::Pose2& pose, const Detection& det) const;
 
@@ -140,6 +147,7 @@ class FastSlam : public SlamFilter {
   double q_[D];                             // landmark process noise per step
   double unknown_heading_inflation_ = 0.0;  // (s_max dt)^2 / 2, for landmarks seen once
   double log_new_d2_;                       // chi2(new_landmark_probability), for the new-landmark weight
+  double max_position_var_;                 // max_landmark_position_sd_m^2
   UpdateBatch<D> batch_;                    // the landmark updates of a step, across particles
 
   common::Rng rng_;

@@ -936,6 +936,37 @@ TEST_P(WithFastSlam, MergeFusesMatchedAndAddsNewLandmarks) {
   EXPECT_GE(filter_->Estimate().landmarks.size(), 2u);
 }
 
+// filter.max_landmark_position_sd_m (default 2 m): a peer landmark already less certain than the
+// bound is not merged; a merged one within it stays while its covariance does; one whose
+// covariance grows past the bound unseen (a landmark with a motion model, out of view) leaves
+// the map, as an own landmark would.
+TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
+  ASSERT_EQ(options_.filter.max_landmark_position_sd_m, 2.0);
+  const auto count_near = [](const FilterEstimate& e, const Eigen::Vector2d& at) {
+    int n = 0;
+    for (const auto& l : e.landmarks) n += (l.mean.head<2>() - at).norm() < 1.0 ? 1 : 0;
+    return n;
+  };
+  const Eigen::Vector2d far(-20.0, -20.0), farther(-30.0, 20.0);  // out of view, unmatched
+  std::vector<MapLandmark> in(2);
+  in[0].mean = {far.x(), far.y(), 0.0};
+  in[0].covariance = Eigen::Vector3d(1.9, 1.9, 3.0).asDiagonal();  // sd sqrt(3.8) < 2 m
+  in[1].mean = {farther.x(), farther.y(), 0.0};
+  in[1].covariance = Eigen::Vector3d(2.1, 2.1, 3.0).asDiagonal();  // sd sqrt(4.2) > 2 m
+  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999), 1);
+  EXPECT_EQ(count_near(filter_->Estimate(), far), 1);
+  EXPECT_EQ(count_near(filter_->Estimate(), farther), 0);
+  testing::TinyWorld world(options_, 5);
+  for (int k = 0; k < 10; ++k) filter_->Process(world.Step());
+  const FilterEstimate after = filter_->Estimate();
+  // Static landmarks keep their covariance when unseen; a motion model spreads it every step.
+  EXPECT_EQ(count_near(after, far), GetParam() == common::LandmarkKinematics::kStatic ? 1 : 0);
+  for (const auto& l : after.landmarks) {
+    const double position_variance = l.covariance(0, 0) + l.covariance(1, 1);
+    EXPECT_LE(position_variance, 4.0 + 1e-9);
+  }
+}
+
 TEST_P(WithFastSlam, MergeKeepsCopyOnWriteSharing) {
   auto* fast = dynamic_cast<FastSlam<2>*>(filter_.get());
   if (fast == nullptr) GTEST_SKIP() << "checked on the static instantiation";
@@ -1015,6 +1046,12 @@ TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
   std::string error;
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("cooperation.max_snapshot_landmarks"), std::string::npos);
+  o = common::CreateScenarioOptions(YAML::Load(std::string(base) + "filter: {max_landmark_position_sd_m: .inf}\n"));
+  EXPECT_TRUE(std::isinf(o.filter.max_landmark_position_sd_m));
+  EXPECT_TRUE(o.IsValid(&error));
+  o = common::CreateScenarioOptions(YAML::Load(std::string(base) + "filter: {max_landmark_position_sd_m: 0}\n"));
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("filter.max_landmark_position_sd_m"), std::string::npos);
 }
 
 }  // namespace
