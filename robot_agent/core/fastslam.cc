@@ -522,7 +522,7 @@ void FastSlam<D>::CountMisses(int p) {
   while (s < particle.count) {
     const Block& view = *particle.blocks[s / kLanes];
     const int lane = s % kLanes;
-    if (Lost(view.Cov(0, 0, lane) + view.Cov(1, 1, lane))) {
+    if (Lost(view.Cov(0, 0, lane), view.Cov(0, 1, lane), view.Cov(1, 1, lane))) {
       RemoveLandmark(&particle, s);  // the last landmark moves into slot s
       continue;
     }
@@ -717,7 +717,7 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
       }
       // Unmatched: a new landmark in this particle, from the peer's estimate, unless it is
       // already too uncertain to keep (it would leave the map at once).
-      if (Lost(peer.covariance(0, 0) + peer.covariance(1, 1))) continue;
+      if (Lost(peer.covariance(0, 0), peer.covariance(0, 1), peer.covariance(1, 1))) continue;
       const int slot = particle.count;
       if (slot / kLanes == static_cast<int>(particle.blocks.size())) {
         particle.blocks.push_back(std::make_shared<Block>());

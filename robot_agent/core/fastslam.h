@@ -132,7 +132,12 @@ class FastSlam : public SlamFilter {
   int FindIdentity(const Particle& particle, int landmark_id) const;
   bool InView(const common::Pose2& pose, double x, double y) const;
   // Whether a landmark of position covariance trace P_xx + P_yy is beyond the bound of step 6.
-  bool Lost(double position_variance) const { return position_variance > max_position_var_; }
+  // A landmark leaves the map when its position covariance says it is lost (sd beyond the bound)
+  // or is no longer positive definite (numerically broken: its likelihood would be undefined).
+  bool Lost(double var_x, double cov_xy, double var_y) const {
+    const bool positive_definite = var_x > 0.0 && var_y > 0.0 && var_x * var_y - cov_xy * cov_xy > 0.0;
+    return !positive_definite || var_x + var_y > max_position_var_;
+  }
   // Position covariance of the point seen at (r, b) from pose: J R J^T.
   Eigen::Matrix2d PointCovariance(const common::Pose2& pose, const Detection& det) const;
 

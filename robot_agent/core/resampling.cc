@@ -11,6 +11,10 @@ std::vector<double> NormalizeLogWeights(std::vector<double>* log_weights) {
   const int n = static_cast<int>(lw.size());
   std::vector<double> w(n, n > 0 ? 1.0 / n : 0.0);
   if (n == 0) return w;
+  // A particle whose likelihood is undefined (NaN) has no weight.
+  for (double& x : lw) {
+    if (std::isnan(x)) x = -std::numeric_limits<double>::infinity();
+  }
   const double max_lw = *std::max_element(lw.begin(), lw.end());
   if (!std::isfinite(max_lw)) {
     std::fill(lw.begin(), lw.end(), -std::log(static_cast<double>(n)));

@@ -8,7 +8,8 @@
 namespace mrslam::robot_agent {
 
 // Normalizes log weights in place so that sum(exp(log_w)) = 1 (subtracting the log-sum-exp);
-// returns the normalized linear weights. All -inf (every particle impossible) resets to uniform.
+// returns the normalized linear weights. A NaN log weight (an undefined likelihood) counts as -inf;
+// all -inf (every particle impossible) resets to uniform.
 std::vector<double> NormalizeLogWeights(std::vector<double>* log_weights);
 
 // Effective sample size 1 / sum(w_i^2) of normalized weights.

@@ -32,6 +32,15 @@ TEST(NormalizeLogWeights, AllImpossibleBecomesUniform) {
   for (const double x : w) EXPECT_DOUBLE_EQ(x, 0.25);
 }
 
+TEST(NormalizeLogWeights, UndefinedLikelihoodHasNoWeight) {
+  std::vector<double> lw = {std::log(0.25), std::nan(""), std::log(0.75)};
+  const std::vector<double> w = NormalizeLogWeights(&lw);
+  EXPECT_NEAR(w[0], 0.25, 1e-12);
+  EXPECT_EQ(w[1], 0.0);
+  EXPECT_NEAR(w[2], 0.75, 1e-12);
+  EXPECT_TRUE(std::isinf(lw[1]) && lw[1] < 0.0);
+}
+
 TEST(EffectiveSampleSize, EqualWeightsGiveNAndOneHotGivesOne) {
   EXPECT_NEAR(EffectiveSampleSize(std::vector<double>(100, 0.01)), 100.0, 1e-9);
   std::vector<double> one_hot(100, 0.0);
