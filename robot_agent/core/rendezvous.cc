@@ -49,6 +49,19 @@ double GoldenSection(F f, double lo, double hi, int iterations) {
   return 0.5 * (a + b);
 }
 
+// The split covariance intersection weight omega in (0, 1) that minimizes det P(omega);
+// solve(omega) returns a result with `ok` and the fused covariance `p`.
+template <typename Solve>
+double MinDeterminantWeight(const Solve& solve) {
+  constexpr double kEps = 1e-6;
+  return GoldenSection(
+      [&](double w) {
+        const auto r = solve(w);
+        return r.ok ? r.p.determinant() : std::numeric_limits<double>::infinity();
+      },
+      kEps, 1.0 - kEps, 60);
+}
+
 }  // namespace
 
 Pose2 RelativePoseFromMutual(const MutualDetection& z, Eigen::Matrix<double, 3, 4>* jacobian) {
@@ -156,14 +169,7 @@ TransformEstimate FuseSplitCi(const TransformEstimate& a, const TransformEstimat
     r.ok = r.p.allFinite();
     return r;
   };
-  constexpr double kEps = 1e-6;
-  const double omega = GoldenSection(
-      [&](double w) {
-        const Result r = fuse(w);
-        return r.ok ? r.p.determinant() : std::numeric_limits<double>::infinity();
-      },
-      kEps, 1.0 - kEps, 60);
-  const Result r = fuse(omega);
+  const Result r = fuse(MinDeterminantWeight(fuse));
   if (!r.ok) return a.Covariance().trace() <= b.Covariance().trace() ? a : b;
   TransformEstimate out;
   out.t = Wrapped(r.p * (r.pa_inv * xa + r.pb_inv * xb));
@@ -230,14 +236,7 @@ std::optional<TransformEstimate> AlignLandmarks(const TransformEstimate& prior,
     }
     return out;
   };
-  constexpr double kEps = 1e-6;
-  const double omega = GoldenSection(
-      [&](double w) {
-        const Solution s = solve(w);
-        return s.ok ? s.p.determinant() : std::numeric_limits<double>::infinity();
-      },
-      kEps, 1.0 - kEps, 60);
-  const Solution s = solve(omega);
+  const Solution s = solve(MinDeterminantWeight(solve));
   if (!s.ok) return std::nullopt;
   TransformEstimate out;
   out.t = s.t;
