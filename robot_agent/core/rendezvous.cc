@@ -227,9 +227,11 @@ std::optional<TransformEstimate> AlignLandmarks(const TransformEstimate& prior,
       const Eigen::LLT<Eigen::Matrix3d> llt(info);
       if (llt.info() != Eigen::Success) return out;
       const Eigen::Vector3d delta = llt.solve(grad);
-      if (i == kMaxIterations || delta.squaredNorm() < kConverged) {
+      const bool converged = delta.squaredNorm() < kConverged;
+      if (converged || i == kMaxIterations) {
+        // A run that is still moving after kMaxIterations is no estimate (e.g. swapped matches).
         out.p = Symmetrize(llt.solve(Eigen::Matrix3d::Identity()));
-        out.ok = out.p.allFinite() && out.t.Vector().allFinite();
+        out.ok = converged && out.p.allFinite() && out.t.Vector().allFinite();
         return out;
       }
       out.t = Wrapped(out.t.Vector() + delta);

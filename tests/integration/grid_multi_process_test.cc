@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "common/config/scenario_options.h"
 #include "tests/integration/child_process.h"
 
 namespace mrslam {
@@ -62,10 +63,11 @@ TEST(GridMultiProcessTest, ScoresTheSameAsInProcess) {
   const auto multi_process = RowsWithoutSeconds(RunGrid(dir + "/mp", true));
   ASSERT_EQ(in_process.size(), 7u);  // header + 3 filters x 2 runs
   EXPECT_EQ(multi_process, in_process);
-  // Every process's log is there (3 agents and world_sim per run).
-  int logs = 0;
+  // Every process's log is there: per run (one row each) world_sim and one robot_agent per robot.
+  const auto robots = common::LoadScenario(SourcePath("config/dynamic_world.yaml"), {}).robots.size();
+  std::size_t logs = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir + "/mp/logs")) logs += entry.is_regular_file();
-  EXPECT_EQ(logs, 6 * 4);
+  EXPECT_EQ(logs, (in_process.size() - 1) * (1 + robots));
   std::filesystem::remove_all(dir);
 }
 
