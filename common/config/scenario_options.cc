@@ -557,6 +557,10 @@ bool ScenarioOptions::IsValid(std::string* error) const {
   c.Check(f.type == "fastslam" || f.type == "ekf" || f.type == "ekf_ela", "filter.type", f.type,
           "must be one of fastslam, ekf, ekf_ela");
   c.Check(f.particles >= 1 && f.particles <= 1000000, "filter.particles", f.particles, "must be in 1..1000000");
+  if (f.motion_source == MotionSource::kImu) {
+    c.Check(f.type == "fastslam", "filter.motion_source", "imu", "is supported by the fastslam filter only");
+    c.Check(sensors.imu.enabled, "filter.motion_source", "imu", "needs sensors.imu.enabled");
+  }
   c.Check(f.gate_probability > 0.0 && f.gate_probability < 1.0, "filter.gate_probability", f.gate_probability,
           "must be in (0, 1)");
   c.Check(f.new_landmark_probability >= f.gate_probability && f.new_landmark_probability < 1.0,

@@ -106,7 +106,7 @@ FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string&
   const int robot = options.RobotIndex(robot_id);
   const Pose2 start = robot >= 0 ? InitialPoseInOwnFrame(options.robots[robot]) : Pose2{};
   const int n = std::max(1, filter_.particles);
-  particles_.assign(n, Particle{start, 0, {}});
+  particles_.assign(n, Particle{start, 0.0, 0, {}});
   log_weights_.assign(n, -std::log(static_cast<double>(n)));
   pose_ = start;
   pose_covariance_.setZero();
@@ -129,10 +129,12 @@ void FastSlam<D>::MotionFromStep(const common::SensorStep& step, std::vector<Seg
                                  Eigen::Vector3d* variance) {
   segments->clear();
   *variance = noise_.robot_process_var;
-  if (filter_.motion_source == common::MotionSource::kImu && !step.imu.readings.empty()) {
-    // w = mean gyro rate; v integrated from accel_x (the robot starts at rest):
-    //   v += mean(accel_x) dt. Its noise adds sd_g^2 dt^2 / n to the heading and the velocity
-    //   variance (a random walk, sd_a^2 dt^2 / n per step) times dt^2 to each position axis.
+  imu_step_ = filter_.motion_source == common::MotionSource::kImu && !step.imu.readings.empty();
+  if (imu_step_) {
+    // w = mean gyro rate; the speed is part of each particle's state (the robot starts at rest):
+    //   v_p += mean(accel_x) dt + N(0, sd_a^2 dt^2 / n),
+    // so the weights select the speeds the landmarks agree with; a speed integrated once for all
+    // particles would drift without bound. The gyro noise adds sd_g^2 dt^2 / n to the heading.
     const int n = static_cast<int>(step.imu.readings.size());
     double gyro = 0.0, accel = 0.0;
     for (const auto& r : step.imu.readings) {
@@ -140,11 +142,8 @@ void FastSlam<D>::MotionFromStep(const common::SensorStep& step, std::vector<Seg
       accel += r.accel_x_mps2;
     }
     const double dt = step_dt_s_;
-    imu_v_mps_ += accel / n * dt;
-    imu_v_var_ += imu_.accel_noise_sd_mps2 * imu_.accel_noise_sd_mps2 * dt * dt / n;
-    segments->push_back({imu_v_mps_, gyro / n, dt});
-    (*variance)(0) += imu_v_var_ * dt * dt;
-    (*variance)(1) += imu_v_var_ * dt * dt;
+    imu_speed_var_ = imu_.accel_noise_sd_mps2 * imu_.accel_noise_sd_mps2 * dt * dt / n;
+    segments->push_back({accel / n * dt, gyro / n, dt});
     (*variance)(2) += imu_.gyro_noise_sd_radps * imu_.gyro_noise_sd_radps * dt * dt / n;
     return;
   }
@@ -229,9 +228,24 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
                                   const std::vector<Detection>& detections, UpdateBatch<D>* batch) {
   Particle& particle = particles_[p];
   // 1. Motion prior N(mu, Sigma).
+  // From the IMU the particle's speed is v ~ N(v_p + dv, q) (q = imu_speed_var_), which moves
+  // the pose along the direction of travel u by dt (v - v_p - dv): the pose prior gains dt^2 q u u^T.
   Pose2 mu = particle.pose;
-  for (const auto& s : segments) mu = common::UnicycleStep(mu, s.v_mps, s.w_radps, s.dt_s);
   Eigen::Matrix3d sigma = var.asDiagonal();
+  double v_prior = 0.0;
+  Eigen::Vector2d u = Eigen::Vector2d::Zero(), prior_xy = Eigen::Vector2d::Zero();
+  if (imu_step_) {
+    const Segment& s = segments.front();
+    v_prior = particle.speed_mps + s.v_mps;
+    u = Eigen::Vector2d(std::cos(mu.heading + 0.5 * s.w_radps * s.dt_s),
+                        std::sin(mu.heading + 0.5 * s.w_radps * s.dt_s));
+    mu = common::UnicycleStep(mu, v_prior, s.w_radps, s.dt_s);
+    prior_xy = mu.Translation();
+    sigma.topLeftCorner<2, 2>() += s.dt_s * s.dt_s * imu_speed_var_ * u * u.transpose();
+  } else {
+    for (const auto& s : segments) mu = common::UnicycleStep(mu, s.v_mps, s.w_radps, s.dt_s);
+  }
+  const double prior_along_var = u.dot(sigma.topLeftCorner<2, 2>() * u);
   if (!fastslam2_) {
     mu = Pose2::FromVector(mu.Vector() + rng_.Gaussian<3>(sigma));
     sigma.setZero();
@@ -317,6 +331,14 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
     mu = Pose2::FromVector(mu.Vector() + delta);
   }
   particle.pose = mu;
+  if (imu_step_) {
+    // The speed given the sampled pose (the scan depends on the speed only through the pose),
+    // from the prior's joint Gaussian of (along-track position, speed): gain k = dt q / Var(along).
+    const double dt_q = step_dt_s_ * imu_speed_var_;
+    const double k = prior_along_var > 0.0 ? dt_q / prior_along_var : 0.0;
+    particle.speed_mps = v_prior + k * u.dot(mu.Translation() - prior_xy) +
+                         rng_.Normal(0.0, std::sqrt(std::max(0.0, imu_speed_var_ - k * dt_q)));
+  }
 
   // 5. Landmark updates at the sampled pose; new landmarks.
   for (const Match& match : matches_) {

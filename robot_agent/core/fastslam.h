@@ -24,7 +24,10 @@ namespace mrslam::robot_agent {
 //
 // One step (Process):
 //  1. Motion prior per particle: mu = UnicycleStep(pose, v, w, dt) from odometry (or the IMU),
-//     Sigma = Q = diag(noise.robot_process_var).
+//     Sigma = Q = diag(noise.robot_process_var). From the IMU (w = gyro), each particle carries
+//     its own speed v_p, integrated from accel_x with its noise: the prior uses
+//     v ~ N(v_p + accel_x dt, q), which adds dt^2 q u u^T to Sigma along the direction of travel
+//     u; once the pose is sampled (step 4), v_p is sampled from its Gaussian given the pose.
 //  2. Every landmark EKF is predicted with its kinematic model (paper A's modification 1:
 //     every step after first sight, seen or not). A landmark seen once has no heading yet: its
 //     position covariance grows by (s_max dt)^2 / 2 per axis per step (displacement of unknown
@@ -97,7 +100,8 @@ class FastSlam : public SlamFilter {
   using Block = LandmarkBlock<D>;
   struct Particle {
     common::Pose2 pose;
-    int count = 0;  // landmarks, in slots 0..count-1
+    double speed_mps = 0.0;  // IMU motion source: this particle's forward speed
+    int count = 0;           // landmarks, in slots 0..count-1
     std::vector<std::shared_ptr<Block>> blocks;
   };
   struct Detection {
@@ -106,6 +110,8 @@ class FastSlam : public SlamFilter {
     int landmark_id = -1;
     int index = 0;  // position in the sorted scan
   };
+  // A piece of the step's motion. From the IMU, v_mps is not a speed but the step's change of
+  // speed (mean accel_x times dt), applied to each particle's own speed.
   struct Segment {
     double v_mps, w_radps, dt_s;
   };
@@ -163,8 +169,8 @@ class FastSlam : public SlamFilter {
   Eigen::Matrix3d pose_covariance_;
   std::uint32_t step_ = 0;
   double time_s_ = 0.0;
-  double imu_v_mps_ = 0.0;  // IMU motion source: velocity integrated from accel_x
-  double imu_v_var_ = 0.0;  // and its variance
+  bool imu_step_ = false;       // this step's motion comes from the IMU
+  double imu_speed_var_ = 0.0;  // IMU: variance of a step's change of speed, sd_a^2 dt^2 / n
   // filter.odometry_lag_s > 0: recent odometry segments (scaled), to replay them lag_s later.
   std::deque<common::OdometrySegment> odometry_history_;
   std::uint32_t next_track_id_ = 1;

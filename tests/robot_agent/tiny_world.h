@@ -21,7 +21,10 @@ namespace mrslam::robot_agent::testing {
 class TinyWorld {
  public:
   TinyWorld(const common::ScenarioOptions& options, std::uint64_t seed)
-      : options_(options), rng_(seed, "tiny_world"), robot_(options.robots.at(0).initial_pose) {
+      : options_(options),
+        rng_(seed, "tiny_world"),
+        imu_rng_(seed, "tiny_world_imu"),
+        robot_(options.robots.at(0).initial_pose) {
     for (const auto& l : options.landmarks) landmarks_.push_back(l.pose);
   }
 
@@ -30,6 +33,7 @@ class TinyWorld {
     const double dt = options_.run.dt_s;
     const auto& control = options_.robots.at(0).control;
     ++step_;
+    const common::Pose2 before = robot_;
     robot_ = Noisy(common::UnicycleStep(robot_, control.v_mps, control.w_radps, dt), options_.noise.robot_process_var);
     for (std::size_t i = 0; i < landmarks_.size(); ++i) {
       const auto& m = options_.landmarks[i].motion;
@@ -42,6 +46,7 @@ class TinyWorld {
     s.lidar.stamp = {options_.robots[0].id, step_, step_ * dt};
     s.odometry.stamp = s.lidar.stamp;
     s.odometry.segments.push_back({(step_ - 1) * dt, dt, control.v_mps, control.w_radps});
+    if (options_.sensors.imu.enabled) s.imu = Imu(before, s.lidar.stamp);
     const auto& lidar = options_.sensors.lidar;
     for (std::size_t i = 0; i < landmarks_.size(); ++i) {
       const common::RangeBearing z = common::MeasureRangeBearing(robot_, landmarks_[i].Translation());
@@ -62,6 +67,21 @@ class TinyWorld {
   const std::vector<common::Pose2>& landmarks() const { return landmarks_; }
 
  private:
+  // One IMU reading per step from the true motion over the step (the robot starts at rest):
+  // gyro_z = w, accel_x = (v - v_previous) / dt, each with its configured noise (own stream).
+  common::ImuSamples Imu(const common::Pose2& before, const common::Stamp& stamp) {
+    const double dt = options_.run.dt_s;
+    const double v = std::hypot(robot_.x - before.x, robot_.y - before.y) / dt;
+    const double w = common::WrapAngle(robot_.heading - before.heading) / dt;
+    const auto& imu = options_.sensors.imu;
+    common::ImuSamples out;
+    out.stamp = stamp;
+    out.readings.push_back({stamp.time_s, w + imu_rng_.Normal(0.0, imu.gyro_noise_sd_radps),
+                            (v - previous_v_) / dt + imu_rng_.Normal(0.0, imu.accel_noise_sd_mps2), 0.0});
+    previous_v_ = v;
+    return out;
+  }
+
   common::Pose2 Noisy(const common::Pose2& p, const Eigen::Vector3d& var) {
     return {p.x + rng_.Normal(0.0, std::sqrt(var(0))), p.y + rng_.Normal(0.0, std::sqrt(var(1))),
             common::WrapAngle(p.heading + rng_.Normal(0.0, std::sqrt(var(2))))};
@@ -69,6 +89,8 @@ class TinyWorld {
 
   common::ScenarioOptions options_;
   common::Rng rng_;
+  common::Rng imu_rng_;
+  double previous_v_ = 0.0;
   std::uint32_t step_ = 0;
   common::Pose2 robot_;
   std::vector<common::Pose2> landmarks_;

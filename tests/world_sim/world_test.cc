@@ -192,7 +192,8 @@ TEST(WorldTest, ImuAgreesWithANoiselessConstantTurn) {
       const auto& r = imu.readings[i];
       EXPECT_NEAR(r.time_s, (k - 1) * 0.1 + (i + 1) * 0.1 / 4, kExact);
       EXPECT_NEAR(r.gyro_z_radps, 0.5, kExact);
-      EXPECT_NEAR(r.accel_x_mps2, 0.0, kExact);        // constant speed, no spike at step 1
+      // From rest to 1 m/s during step 1, then constant speed.
+      EXPECT_NEAR(r.accel_x_mps2, k == 1 ? 1.0 / 0.1 : 0.0, kExact);
       EXPECT_NEAR(r.accel_y_mps2, 1.0 * 0.5, kExact);  // v w
     }
   }
@@ -206,6 +207,7 @@ TEST(WorldTest, ImuNoiseHasTheConfiguredMeanAndVariance) {
   o.sensors.imu.accel_noise_sd_mps2 = 0.05;
   World world(o);
   std::vector<double> gyro, gyro_err, ax_err, ay_err;
+  world.Step();  // step 1: the acceleration from rest
   for (int k = 0; k < 2000; ++k) {
     const auto r = world.Step()[0].imu.readings.at(0);
     gyro.push_back(r.gyro_z_radps);
@@ -225,8 +227,8 @@ TEST(WorldTest, ImuSeesASpeedChangeAndCanBeDisabled) {
   c.type = common::ControlType::kSchedule;
   c.segments = {{1.0, 0.0, 0.3}, {2.0, 0.0, 0.3}};
   World world(o);
+  EXPECT_NEAR(world.Step()[0].imu.readings.at(0).accel_x_mps2, 1.0 / 0.1, kExact);  // from rest
   EXPECT_NEAR(world.Step()[0].imu.readings.at(0).accel_x_mps2, 0.0, kExact);
-  world.Step();
   world.Step();
   // (v_4 - v_3) / dt = (2 - 1) / 0.1.
   EXPECT_NEAR(world.Step()[0].imu.readings.at(0).accel_x_mps2, 10.0, 1e-6);

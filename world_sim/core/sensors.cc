@@ -40,12 +40,14 @@ common::ImuSamples RobotSensors::SenseImu(const SensingInput& input, const commo
   // The true motion over step k (process noise included):
   //   v_k = |p_k - p_{k-1}| / dt,  w_k = wrap(phi_k - phi_{k-1}) / dt,
   //   gyro_z = w_k, accel_x = (v_k - v_{k-1}) / dt (tangential), accel_y = v_k * w_k
-  //   (centripetal), with v_0 = the first step's commanded speed (no spike at step 1).
+  //   (centripetal), with v_0 = 0: the robot stands still at step 0, so step 1's reading carries
+  //   its acceleration to the first speed (an accelerometer sees it; a filter integrating
+  //   accel_x from rest needs it).
   const double dt_s = input.dt_s;
   const double v_mps =
       std::hypot(input.pose_after.x - input.pose_before.x, input.pose_after.y - input.pose_before.y) / dt_s;
   const double w_radps = common::WrapAngle(input.pose_after.heading - input.pose_before.heading) / dt_s;
-  const double previous_v_mps = previous_speed_mps_.value_or(input.command.v_mps);
+  const double previous_v_mps = previous_speed_mps_.value_or(0.0);
   previous_speed_mps_ = v_mps;
   if (!options_.imu.enabled) return imu;
 
