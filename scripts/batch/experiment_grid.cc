@@ -557,7 +557,7 @@ int main(int argc, char** argv) {
   try {
     return mrslam::batch::Main(argc, argv);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "mrslam_grid: %s\n", e.what());
+    std::fprintf(stderr, "mrslam_grid: error: %s\n", e.what());
     return 1;
   }
 }

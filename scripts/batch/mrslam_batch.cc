@@ -212,7 +212,7 @@ int main(int argc, char** argv) {
   try {
     return mrslam::Main(argc, argv);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "mrslam_batch: %s\n", e.what());
+    std::fprintf(stderr, "mrslam_batch: error: %s\n", e.what());
     return 1;
   }
 }
