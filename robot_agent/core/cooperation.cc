@@ -114,6 +114,7 @@ void TrimToSize(Map* m, std::size_t size) {
 Cooperation::Cooperation(const common::ScenarioOptions& scenario, const std::string& robot_id)
     : scenario_(scenario),
       robot_id_(robot_id),
+      self_index_(scenario.RobotIndex(robot_id)),
       var_range_(scenario.sensors.lidar.range_noise_sd_m * scenario.sensors.lidar.range_noise_sd_m),
       var_bearing_(scenario.sensors.lidar.bearing_noise_sd_rad * scenario.sensors.lidar.bearing_noise_sd_rad) {
   // A noiseless lidar still needs a usable measurement covariance.
@@ -161,8 +162,9 @@ bool Cooperation::SnapshotValid(const MapSnapshot& m) const {
   if (!HeaderValid(m.header)) return false;
   if (static_cast<int>(m.landmarks.size()) > scenario_.cooperation.max_snapshot_landmarks) return false;
   if (m.known_transforms.size() > scenario_.robots.size()) return false;
+  const int robots = static_cast<int>(scenario_.robots.size());
   for (const auto& l : m.landmarks) {
-    if (!ValidLandmark(l)) return false;
+    if (!ValidLandmark(l) || l.origin_robot < -1 || l.origin_robot >= robots) return false;
   }
   for (const auto& t : m.known_transforms) {
     if (scenario_.RobotIndex(t.peer) < 0 || t.peer == m.header.sender || !ValidTransform(t)) return false;
@@ -353,16 +355,19 @@ void Cooperation::AlignWithSnapshot(const MapSnapshot& m, const FilterEstimate& 
   // predicted to its own step).
   const bool same_step = own.step == m.header.step;
   const TransformEstimate& held = *sender->transform;
+  // A landmark that came from the other side (by provenance) is that side's estimate seen
+  // through the transform held when it was merged: it would only confirm that transform.
+  const int sender_index = scenario_.RobotIndex(m.header.sender);
   const Eigen::Matrix3d t_cov = held.Covariance();
   std::vector<MapLandmark> mine, theirs;
   std::vector<MatchCandidate> mine_c, theirs_c;
   for (const auto& l : SnapshotLandmarks(own, scenario_.cooperation.max_snapshot_landmarks)) {
-    if (!same_step && l.moving) continue;
+    if ((!same_step && l.moving) || l.origin_robot == sender_index) continue;
     mine.push_back(l);
     mine_c.push_back(Candidate(l));
   }
   for (const auto& l : m.landmarks) {
-    if (!same_step && l.moving) continue;
+    if ((!same_step && l.moving) || l.origin_robot == self_index_) continue;
     theirs.push_back(l);
     theirs_c.push_back(Candidate(TransformLandmark(l, held.t, t_cov)));
   }
@@ -398,7 +403,11 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
   std::vector<MapLandmark> moved;
   moved.reserve(m.landmarks.size());
   const Eigen::Matrix3d t_cov = t_self_sender.Covariance();
-  for (const auto& l : m.landmarks) moved.push_back(TransformLandmark(l, t_self_sender.t, t_cov));
+  for (const auto& l : m.landmarks) {
+    // The own landmarks coming back (by provenance) carry nothing new: not merged again.
+    if (l.origin_robot != self_index_) moved.push_back(TransformLandmark(l, t_self_sender.t, t_cov));
+  }
+  if (moved.empty()) return;
   filter->MergeLandmarks(moved, scenario_.cooperation.map_fusion, scenario_.cooperation.match_gate_probability);
 }
 

@@ -99,6 +99,7 @@ class Cooperation {
 
   common::ScenarioOptions scenario_;
   std::string robot_id_;
+  int self_index_ = -1;  // in the scenario (the provenance of the own landmarks)
   double var_range_ = 0.0, var_bearing_ = 0.0;
   std::map<std::string, PeerState> peers_;
   std::vector<RendezvousEvent> rendezvous_;

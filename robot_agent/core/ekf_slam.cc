@@ -61,7 +61,8 @@ EkfSlam::EkfSlam(const common::ScenarioOptions& options, const std::string& robo
       step_dt_s_(options.run.dt_s),
       ela_(ela),
       gates_(AssociationGates::FromOptions(options.filter)),
-      ela_gate_d2_(common::ChiSquare2Quantile(options.filter.ela_gate_probability)) {
+      ela_gate_d2_(common::ChiSquare2Quantile(options.filter.ela_gate_probability)),
+      robot_index_(options.RobotIndex(robot_id)) {
   r_ << lidar_.range_noise_sd_m * lidar_.range_noise_sd_m, 0.0, 0.0,
       lidar_.bearing_noise_sd_rad * lidar_.bearing_noise_sd_rad;
   const int robot = options.RobotIndex(robot_id);
@@ -198,13 +199,15 @@ void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int land
   Slot slot;
   slot.track_id = track_id;
   slot.landmark_id = landmark_id;
+  slot.origin_robot = robot_index_;
+  slot.origin_track = track_id;
   slot.last_seen_step = step_;
   slot.moving = moving;
   slots_.push_back(slot);
 }
 
 void EkfSlam::AppendIndependent(const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov, std::uint32_t track_id,
-                                int landmark_id) {
+                                const MapLandmark& peer) {
   const int n = static_cast<int>(x_.size());
   x_.conservativeResize(n + 2);
   x_.segment<2>(n) = mean;
@@ -214,7 +217,9 @@ void EkfSlam::AppendIndependent(const Eigen::Vector2d& mean, const Eigen::Matrix
   p_.block<2, 2>(n, n) = 0.5 * (cov + cov.transpose());
   Slot slot;
   slot.track_id = track_id;
-  slot.landmark_id = landmark_id;
+  slot.landmark_id = peer.landmark_id;
+  slot.origin_robot = peer.origin_robot;
+  slot.origin_track = peer.origin_track;
   slot.last_seen_step = step_;
   slots_.push_back(slot);
 }
@@ -258,7 +263,7 @@ bool EkfSlam::ExpectedInView(int s) const {
 void EkfSlam::Restart(int s, const Detection& det, std::vector<int>* removals) {
   ++flagged_observations_;
   removals->push_back(s);
-  restarts_.push_back({det, slots_[s].track_id, slots_[s].landmark_id});
+  restarts_.push_back({det, slots_[s].track_id, slots_[s].landmark_id, slots_[s].origin_robot, slots_[s].origin_track});
   if (slots_[s].moving) return;
   Eigen::Vector2d point;
   Eigen::Matrix2d cov;
@@ -414,7 +419,11 @@ void EkfSlam::Process(const common::SensorStep& step) {
     }
   }
   RemoveSlots(removals);
-  for (const auto& r : restarts_) AddLandmark(r.detection, r.track_id, r.landmark_id, /*moving=*/true);
+  for (const auto& r : restarts_) {
+    AddLandmark(r.detection, r.track_id, r.landmark_id, /*moving=*/true);
+    slots_.back().origin_robot = r.origin_robot;
+    slots_.back().origin_track = r.origin_track;
+  }
   for (const auto& det : fresh) AddLandmark(det, next_track_id_++, det.landmark_id, /*moving=*/false);
 }
 
@@ -429,6 +438,8 @@ FilterEstimate EkfSlam::Estimate() const {
     MapLandmark l;
     l.track_id = slots_[s].track_id;
     l.landmark_id = slots_[s].landmark_id;
+    l.origin_robot = slots_[s].origin_robot;
+    l.origin_track = slots_[s].origin_track;
     l.mean << x_.segment<2>(3 + 2 * s), 0.0;
     l.covariance.setZero();
     l.covariance.topLeftCorner<2, 2>() = p_.block<2, 2>(3 + 2 * s, 3 + 2 * s);
@@ -447,14 +458,15 @@ int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_fra
   std::vector<const MapLandmark*> usable;
   for (int s = 0; s < NumSlots(); ++s) {
     if (slots_[s].moving) continue;
-    own.push_back({x_.segment<2>(3 + 2 * s), p_.block<2, 2>(3 + 2 * s, 3 + 2 * s), slots_[s].landmark_id});
+    own.push_back({x_.segment<2>(3 + 2 * s), p_.block<2, 2>(3 + 2 * s, 3 + 2 * s), slots_[s].landmark_id,
+                   OriginKey(slots_[s].origin_robot, slots_[s].origin_track)});
     own_slot.push_back(s);
   }
   for (const auto& l : landmarks_in_own_frame) {
     const Eigen::Matrix2d c = l.covariance.topLeftCorner<2, 2>();
     if (l.moving || !l.mean.head<2>().allFinite() || !common::IsSymmetricPositiveDefinite<2>(c)) continue;
     usable.push_back(&l);
-    incoming.push_back({l.mean.head<2>(), c, l.landmark_id});
+    incoming.push_back({l.mean.head<2>(), c, l.landmark_id, OriginKey(l.origin_robot, l.origin_track)});
   }
   const std::vector<int> match = MatchLandmarks(own, incoming, common::ChiSquare2Quantile(gate_probability));
   int added = 0;
@@ -462,7 +474,7 @@ int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_fra
     const Eigen::Vector2d z = incoming[i].position;
     const Eigen::Matrix2d r = incoming[i].covariance;
     if (match[i] < 0) {
-      AppendIndependent(z, r, next_track_id_++, usable[i]->landmark_id);
+      AppendIndependent(z, r, next_track_id_++, *usable[i]);
       ++added;
       continue;
     }

@@ -104,6 +104,8 @@ class EkfSlam : public SlamFilter {
   struct Slot {
     std::uint32_t track_id = 0;
     int landmark_id = -1;
+    int origin_robot = -1;  // provenance (MapLandmark::origin_robot, origin_track)
+    std::uint32_t origin_track = 0;
     std::uint32_t last_seen_step = 0;
     int misses = 0;
     bool moving = false;  // on probation (ekf_ela, step 6)
@@ -119,17 +121,20 @@ class EkfSlam : public SlamFilter {
     Detection detection;
     std::uint32_t track_id = 0;
     int landmark_id = -1;
+    int origin_robot = -1;
+    std::uint32_t origin_track = 0;
   };
 
   int NumSlots() const { return static_cast<int>(slots_.size()); }
   void Predict(const common::SensorStep& step);
   // d2 and innovation covariance of detection det against slot s.
   double AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_out = nullptr) const;
-  // Appends a landmark from detection det (step 5), on probation if moving.
+  // Appends a landmark from detection det (step 5), on probation if moving; its provenance is
+  // this robot and track_id.
   void AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, bool moving);
-  // Appends a landmark given as N(mean, cov), uncorrelated with x.
+  // Appends a peer's landmark given as N(mean, cov), uncorrelated with x, keeping its provenance.
   void AppendIndependent(const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov, std::uint32_t track_id,
-                         int landmark_id);
+                         const MapLandmark& peer);
   // Removes the slots (any order), marginalizing them out of x.
   void RemoveSlots(std::vector<int> slots);
   // The observed point g(R, z) and its covariance through the pose (no cross terms with m).
@@ -150,7 +155,8 @@ class EkfSlam : public SlamFilter {
   const bool ela_;
   const AssociationGates gates_;
   const double ela_gate_d2_;
-  Eigen::Matrix2d r_;  // lidar noise diag(var_r, var_b)
+  const int robot_index_;  // in the scenario: the provenance of the landmarks it maps
+  Eigen::Matrix2d r_;      // lidar noise diag(var_r, var_b)
 
   Eigen::VectorXd x_;
   Eigen::MatrixXd p_;

@@ -83,6 +83,7 @@ FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string&
       step_dt_s_(options.run.dt_s),
       gates_(AssociationGates::FromOptions(options.filter)),
       fastslam2_(options.filter.proposal == common::Proposal::kMeasurement),
+      robot_index_(options.RobotIndex(robot_id)),
       var_r_(lidar_.range_noise_sd_m * lidar_.range_noise_sd_m),
       var_b_(lidar_.bearing_noise_sd_rad * lidar_.bearing_noise_sd_rad),
       log_new_d2_(common::ChiSquare2Quantile(options.filter.new_landmark_probability)),
@@ -423,6 +424,8 @@ void FastSlam<D>::CreateLandmark(Particle* particle, const Pose2& pose, const De
   meta = LandmarkMeta{};
   meta.track_id = id;
   meta.landmark_id = det.landmark_id;
+  meta.origin_robot = static_cast<std::int16_t>(robot_index_);
+  meta.origin_track = id;
   meta.first_seen_step = step_;
   meta.last_seen_step = step_;
   meta.sightings = 1;
@@ -642,6 +645,8 @@ FilterEstimate FastSlam<D>::Estimate() const {
     a.xy += wp * Eigen::Vector2d(b.Mean(0, l), b.Mean(1, l));
     if (b.meta[l].sightings < filter_.confirm_sightings) a.tentative_weight += wp;
     a.out.landmark_id = b.meta[l].landmark_id;
+    a.out.origin_robot = b.meta[l].origin_robot;
+    a.out.origin_track = b.meta[l].origin_track;
     a.out.last_seen_step = std::max(a.out.last_seen_step, b.meta[l].last_seen_step);
     if (has_heading(b, l)) {
       a.heading_weight += wp;
@@ -705,7 +710,8 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
   std::vector<MatchCandidate> incoming;
   incoming.reserve(in.size());
   for (const auto& l : in) {
-    incoming.push_back({l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id});
+    incoming.push_back({l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id,
+                        OriginKey(l.origin_robot, l.origin_track)});
   }
   std::vector<std::uint32_t> new_ids(in.size(), 0);  // one track id per added landmark
   std::vector<MatchCandidate> own;
@@ -716,7 +722,10 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
       const int l = s % kLanes;
       Eigen::Matrix2d c;
       c << b.Cov(0, 0, l), b.Cov(0, 1, l), b.Cov(0, 1, l), b.Cov(1, 1, l);
-      own.push_back({{b.Mean(0, l), b.Mean(1, l)}, c, b.meta[l].landmark_id});
+      own.push_back({{b.Mean(0, l), b.Mean(1, l)},
+                     c,
+                     b.meta[l].landmark_id,
+                     OriginKey(b.meta[l].origin_robot, b.meta[l].origin_track)});
     }
     const std::vector<int> match = MatchLandmarks(own, incoming, gate);
     for (std::size_t i = 0; i < in.size(); ++i) {
@@ -778,6 +787,8 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
       meta = LandmarkMeta{};
       meta.track_id = id;
       meta.landmark_id = peer.landmark_id;
+      meta.origin_robot = static_cast<std::int16_t>(peer.origin_robot);
+      meta.origin_track = peer.origin_track;
       meta.first_seen_step = step_;
       meta.last_seen_step = std::min(step_, peer.last_seen_step);
       meta.sightings = static_cast<std::uint16_t>(std::max(1, filter_.confirm_sightings));

@@ -77,7 +77,7 @@ class FastSlam : public SlamFilter {
   void Process(const common::SensorStep& step) override;
   FilterEstimate Estimate() const override;
   // Map merging (SlamFilter): per particle, incoming landmarks are matched to the particle's
-  // (MatchLandmarks: identities, else Mahalanobis on position); a match is fused by rule
+  // (MatchLandmarks: identities or provenance, else Mahalanobis on position); a match is fused by rule
   // (FuseObservation on position, plus heading when both have one); the others are added to
   // every particle under one new track id each, confirmed (the peer confirmed them), except those
   // whose position standard deviation exceeds max_landmark_position_sd_m (step 6). Blocks
@@ -154,6 +154,7 @@ class FastSlam : public SlamFilter {
   const double step_dt_s_;
   const AssociationGates gates_;
   const bool fastslam2_;
+  const int robot_index_;  // in the scenario: the provenance of the landmarks it maps
   double var_r_, var_b_;
   double q_[D];                             // landmark process noise per step
   double unknown_heading_inflation_ = 0.0;  // (s_max dt)^2 / 2, for landmarks seen once

@@ -251,8 +251,10 @@ Eigen::Matrix<double, 2, 3> MeasurementJacobianPose(const Eigen::Vector2d& landm
 
 // Bookkeeping of one landmark slot of one particle.
 struct LandmarkMeta {
-  std::uint32_t track_id = 0;     // shared by every particle that created it from one detection
-  std::int32_t landmark_id = -1;  // reported identity, -1 if unknown
+  std::uint32_t track_id = 0;      // shared by every particle that created it from one detection
+  std::int32_t landmark_id = -1;   // reported identity, -1 if unknown
+  std::uint32_t origin_track = 0;  // provenance (MapLandmark::origin_robot, origin_track)
+  std::int16_t origin_robot = -1;
   std::uint32_t first_seen_step = 0;
   std::uint32_t last_seen_step = 0;
   std::uint16_t sightings = 0;

@@ -139,6 +139,10 @@ bool FuseObservation(Eigen::VectorXd* x, Eigen::MatrixXd* p, const Eigen::Vector
   return true;
 }
 
+std::int64_t OriginKey(int origin_robot, std::uint32_t origin_track) {
+  return origin_robot < 0 ? -1 : (static_cast<std::int64_t>(origin_robot) << 32) | origin_track;
+}
+
 std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const std::vector<MatchCandidate>& incoming,
                                 double gate_d2) {
   // (distance, incoming, own); identity matches get distance -1 so that they come first.
@@ -149,6 +153,10 @@ std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const st
       const MatchCandidate& o = own[j];
       if (in.landmark_id >= 0 && o.landmark_id >= 0) {
         if (in.landmark_id == o.landmark_id) pairs.emplace_back(-1.0, i, j);
+        continue;
+      }
+      if (in.origin >= 0 && in.origin == o.origin) {
+        pairs.emplace_back(-1.0, i, j);
         continue;
       }
       const Eigen::Vector2d d = in.position - o.position;

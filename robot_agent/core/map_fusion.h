@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -40,12 +41,17 @@ struct MatchCandidate {
   Eigen::Vector2d position = Eigen::Vector2d::Zero();
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
   int landmark_id = -1;
+  std::int64_t origin = -1;  // OriginKey of its provenance, -1 if unknown
 };
 
+// One number for a provenance (robot index, track id); -1 when the robot is unknown (< 0).
+std::int64_t OriginKey(int origin_robot, std::uint32_t origin_track);
+
 // Matches incoming landmarks to own ones, one to one: when both carry reported identities they
-// match exactly when the identities are equal; otherwise a pair is a candidate when the squared
-// Mahalanobis distance of the positions under the sum of their covariances is within gate_d2
-// (chi-square, 2 dof). Candidates are taken greedily by increasing distance (identity matches
+// match exactly when the identities are equal; landmarks of the same provenance (equal origin
+// keys) match as identities do; otherwise a pair is a candidate when the squared Mahalanobis
+// distance of the positions under the sum of their covariances is within gate_d2 (chi-square,
+// 2 dof). Candidates are taken greedily by increasing distance (identity and provenance matches
 // first). Returns, per incoming landmark, the index of its own match or -1.
 std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const std::vector<MatchCandidate>& incoming,
                                 double gate_d2);

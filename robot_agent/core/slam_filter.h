@@ -27,6 +27,10 @@ struct MapLandmark {
   bool moving = false;
   bool tentative = false;
   std::uint32_t last_seen_step = 0;
+  // Provenance: the robot (scenario index) that first mapped the landmark and its track id
+  // there. Merged landmarks keep theirs, so a landmark coming back from a peer is recognized.
+  int origin_robot = -1;
+  std::uint32_t origin_track = 0;
 };
 
 // A mapped landmark the filter saw move (paper B's ELA test), for "landmark moved" notices.

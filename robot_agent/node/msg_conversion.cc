@@ -23,6 +23,8 @@ msg::LandmarkEstimate ToMsg(const MapLandmark& l) {
   m.moving(l.moving);
   m.tentative(l.tentative);
   m.last_seen_step(l.last_seen_step);
+  m.origin_robot(static_cast<std::int16_t>(l.origin_robot));
+  m.origin_track(l.origin_track);
   return m;
 }
 
@@ -38,6 +40,8 @@ MapLandmark FromMsg(const msg::LandmarkEstimate& m) {
   l.moving = m.moving();
   l.tentative = m.tentative();
   l.last_seen_step = m.last_seen_step();
+  l.origin_robot = m.origin_robot();
+  l.origin_track = m.origin_track();
   return l;
 }
 

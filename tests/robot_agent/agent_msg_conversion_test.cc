@@ -19,6 +19,8 @@ MapLandmark SomeLandmark(int k) {
   l.moving = true;
   l.tentative = k % 2 == 0;
   l.last_seen_step = 42;
+  l.origin_robot = k % 3 - 1;
+  l.origin_track = 70U + static_cast<std::uint32_t>(k);
   return l;
 }
 
@@ -33,6 +35,8 @@ void ExpectSame(const MapLandmark& a, const MapLandmark& b) {
   EXPECT_EQ(a.moving, b.moving);
   EXPECT_EQ(a.tentative, b.tentative);
   EXPECT_EQ(a.last_seen_step, b.last_seen_step);
+  EXPECT_EQ(a.origin_robot, b.origin_robot);
+  EXPECT_EQ(a.origin_track, b.origin_track);
 }
 
 TEST(AgentMsgConversionTest, EstimateRoundTrip) {

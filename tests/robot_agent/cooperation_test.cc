@@ -785,6 +785,39 @@ TEST_F(HostileInput, UnknownRobots) {
   ExpectRejected({{m}, {a, b, c}, {n}});
 }
 
+// Landmarks carry their provenance (the robot that first mapped them): one naming a robot the
+// scenario does not have is hostile input; r1's own landmarks coming back from r2 (after r2
+// merged them) are not merged again, neither as duplicates nor as confirmation.
+TEST_F(HostileInput, ProvenanceOfAnUnknownRobot) {
+  MapSnapshot a = GoodSnapshot();
+  a.landmarks[0].origin_robot = 3;  // robots 0..2
+  MapSnapshot b = GoodSnapshot();
+  b.landmarks[0].origin_robot = -2;
+  ExpectRejected({{}, {a, b}, {}});
+}
+
+TEST_F(HostileInput, OwnLandmarksComingBackAreNotMergedAgain) {
+  MapSnapshot echo = GoodSnapshot();
+  echo.landmarks[0].origin_robot = 0;  // r1's
+  echo.landmarks[0].origin_track = 5;
+  const int merges = sim_.filter(0).merges;
+  const std::size_t mapped = sim_.filter(0).estimate.landmarks.size();
+  sim_.agent(0).Receive({{}, {echo}, {}}, &sim_.filter(0));
+  EXPECT_EQ(sim_.filter(0).merges, merges);
+  EXPECT_EQ(sim_.filter(0).estimate.landmarks.size(), mapped);
+  EXPECT_EQ(sim_.agent(0).rejected_messages(), 0);  // not hostile: simply nothing new
+
+  MapSnapshot mixed = GoodSnapshot();
+  mixed.header.step = echo.header.step;
+  mixed.landmarks.push_back(echo.landmarks[0]);
+  mixed.landmarks[0].origin_robot = 2;  // r3's, merged by r2 earlier
+  mixed.landmarks[1].mean.x() = -10.0;  // r1's, elsewhere
+  sim_.agent(0).Receive({{}, {mixed}, {}}, &sim_.filter(0));
+  EXPECT_EQ(sim_.filter(0).merges, merges + 1);
+  ASSERT_EQ(sim_.filter(0).estimate.landmarks.size(), mapped + 1);  // r3's only
+  EXPECT_EQ(sim_.filter(0).estimate.landmarks.back().origin_robot, 2);
+}
+
 TEST_F(HostileInput, AbsurdSize) {
   MapSnapshot a = GoodSnapshot();
   a.landmarks.assign(257, a.landmarks[0]);

@@ -206,6 +206,25 @@ TEST(MatchLandmarks, GatesByMahalanobisAndIdentity) {
   EXPECT_EQ(m[2], -1);
 }
 
+// Landmarks of the same provenance (robot, track) are one landmark wherever the estimates put
+// them; different provenances fall back on the gate (two robots may map one landmark).
+TEST(MatchLandmarks, SameProvenanceMatchesLikeAnIdentity) {
+  const Eigen::Matrix2d c = Eigen::Matrix2d::Identity() * 0.01;
+  const std::int64_t a = OriginKey(1, 7), b = OriginKey(2, 7);
+  EXPECT_NE(a, b);
+  EXPECT_EQ(OriginKey(-1, 7), -1);
+  const std::vector<MatchCandidate> own = {{{0.0, 0.0}, c, -1, a}, {{5.0, 0.0}, c, -1, b}};
+  const std::vector<MatchCandidate> incoming = {
+      {{4.0, 0.0}, c, -1, a},   // far from own 0, but the same landmark
+      {{5.05, 0.0}, c, -1, -1}  // no provenance: by the gate
+  };
+  const std::vector<int> m = MatchLandmarks(own, incoming, 13.8);
+  EXPECT_EQ(m[0], 0);
+  EXPECT_EQ(m[1], 1);
+  const std::vector<int> other = MatchLandmarks(own, {{{4.0, 0.0}, c, -1, OriginKey(3, 7)}}, 13.8);
+  EXPECT_EQ(other[0], -1);
+}
+
 TEST(MatchLandmarks, DifferentIdentitiesNeverMatch) {
   const Eigen::Matrix2d c = Eigen::Matrix2d::Identity() * 0.01;
   const std::vector<int> m = MatchLandmarks({{{0.0, 0.0}, c, 1}}, {{{0.0, 0.0}, c, 2}}, 100.0);
