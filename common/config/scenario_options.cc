@@ -14,7 +14,7 @@ namespace {
 // as unknown, and names every key by its full path in errors.
 class Section {
  public:
-  Section(YAML::Node node, std::string path) : node_(std::move(node)), path_(std::move(path)) {
+  Section(const YAML::Node& node, std::string path) : node_(node), path_(std::move(path)) {
     if (node_ && !node_.IsNull() && !node_.IsMap()) {
       throw ScenarioError("scenario key '" + PathOr("<root>") + "' must be a mapping");
     }

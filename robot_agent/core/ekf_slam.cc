@@ -366,6 +366,7 @@ void EkfSlam::Process(const common::SensorStep& step) {
   std::vector<bool> moving(matches.size(), false);
   if (ela_ && !matches.empty()) {
     std::vector<ElaObservation> obs;
+    obs.reserve(matches.size());
     for (const auto& [d, s] : matches) {
       obs.push_back({s, detections[d].range_m, detections[d].bearing_rad, !slots_[s].moving});
     }

@@ -156,7 +156,7 @@ class FastSlam : public SlamFilter {
   const bool fastslam2_;
   const int robot_index_;  // in the scenario: the provenance of the landmarks it maps
   double var_r_, var_b_;
-  double q_[D];                             // landmark process noise per step
+  double q_[D] = {};                        // landmark process noise per step
   double unknown_heading_inflation_ = 0.0;  // (s_max dt)^2 / 2, for landmarks seen once
   double log_new_d2_;                       // chi2(new_landmark_probability), for the new-landmark weight
   double max_position_var_;                 // max_landmark_position_sd_m^2
