@@ -65,8 +65,7 @@ EkfSlam::EkfSlam(const common::ScenarioOptions& options, const std::string& robo
       robot_index_(options.RobotIndex(robot_id)) {
   r_ << lidar_.range_noise_sd_m * lidar_.range_noise_sd_m, 0.0, 0.0,
       lidar_.bearing_noise_sd_rad * lidar_.bearing_noise_sd_rad;
-  const int robot = options.RobotIndex(robot_id);
-  const common::Pose2 start = robot >= 0 ? InitialPoseInOwnFrame(options.robots[robot]) : common::Pose2{};
+  const common::Pose2 start = robot_index_ >= 0 ? InitialPoseInOwnFrame(options.robots[robot_index_]) : common::Pose2{};
   x_ = start.Vector();
   p_ = Eigen::MatrixXd::Zero(3, 3);  // the initial pose in the own frame is known
 }

@@ -104,8 +104,7 @@ FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string&
   const double s_max_step = MaxLandmarkSpeed(filter_) * step_dt_s_;
   unknown_heading_inflation_ = 0.5 * s_max_step * s_max_step;
 
-  const int robot = options.RobotIndex(robot_id);
-  const Pose2 start = robot >= 0 ? InitialPoseInOwnFrame(options.robots[robot]) : Pose2{};
+  const Pose2 start = robot_index_ >= 0 ? InitialPoseInOwnFrame(options.robots[robot_index_]) : Pose2{};
   const int n = std::max(1, filter_.particles);
   particles_.assign(n, Particle{start, 0.0, 0, {}});
   log_weights_.assign(n, -std::log(static_cast<double>(n)));
