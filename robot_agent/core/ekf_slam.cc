@@ -179,7 +179,8 @@ void EkfSlam::SightPoint(const Detection& det, Eigen::Vector2d* point, Eigen::Ma
   *cov = g_r * p_.topLeftCorner<3, 3>() * g_r.transpose() + g_z * r_ * g_z.transpose();
 }
 
-void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, bool moving) {
+void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, int origin_robot,
+                          std::uint32_t origin_track, bool moving) {
   const int n = static_cast<int>(x_.size());
   const double a = x_(2) + det.bearing_rad, c = std::cos(a), s = std::sin(a), r = det.range_m;
   Eigen::Matrix<double, 2, 3> g_r;
@@ -198,8 +199,8 @@ void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int land
   Slot slot;
   slot.track_id = track_id;
   slot.landmark_id = landmark_id;
-  slot.origin_robot = robot_index_;
-  slot.origin_track = track_id;
+  slot.origin_robot = origin_robot;
+  slot.origin_track = origin_track;
   slot.last_seen_step = step_;
   slot.moving = moving;
   slots_.push_back(slot);
@@ -420,11 +421,12 @@ void EkfSlam::Process(const common::SensorStep& step) {
   }
   RemoveSlots(removals);
   for (const auto& r : restarts_) {
-    AddLandmark(r.detection, r.track_id, r.landmark_id, /*moving=*/true);
-    slots_.back().origin_robot = r.origin_robot;
-    slots_.back().origin_track = r.origin_track;
+    AddLandmark(r.detection, r.track_id, r.landmark_id, r.origin_robot, r.origin_track, /*moving=*/true);
   }
-  for (const auto& det : fresh) AddLandmark(det, next_track_id_++, det.landmark_id, /*moving=*/false);
+  for (const auto& det : fresh) {
+    const std::uint32_t id = next_track_id_++;
+    AddLandmark(det, id, det.landmark_id, robot_index_, id, /*moving=*/false);
+  }
 }
 
 FilterEstimate EkfSlam::Estimate() const {

@@ -129,9 +129,9 @@ class EkfSlam : public SlamFilter {
   void Predict(const common::SensorStep& step);
   // d2 and innovation covariance of detection det against slot s.
   double AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_out = nullptr) const;
-  // Appends a landmark from detection det (step 5), on probation if moving; its provenance is
-  // this robot and track_id.
-  void AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, bool moving);
+  // Appends a landmark from detection det (step 5), on probation if moving, with its provenance.
+  void AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, int origin_robot,
+                   std::uint32_t origin_track, bool moving);
   // Appends a peer's landmark given as N(mean, cov), uncorrelated with x, keeping its provenance.
   void AppendIndependent(const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov, std::uint32_t track_id,
                          const MapLandmark& peer);
