@@ -142,8 +142,9 @@ void FastSlam<D>::MotionFromStep(const common::SensorStep& step, std::vector<Seg
       accel += r.accel_x_mps2;
     }
     const double dt = step_dt_s_;
+    imu_speed_change_ = accel / n * dt;
     imu_speed_var_ = imu_.accel_noise_sd_mps2 * imu_.accel_noise_sd_mps2 * dt * dt / n;
-    segments->push_back({accel / n * dt, gyro / n, dt});
+    segments->push_back({0.0, gyro / n, dt});
     (*variance)(2) += imu_.gyro_noise_sd_radps * imu_.gyro_noise_sd_radps * dt * dt / n;
     return;
   }
@@ -236,7 +237,7 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
   Eigen::Vector2d u = Eigen::Vector2d::Zero(), prior_xy = Eigen::Vector2d::Zero();
   if (imu_step_) {
     const Segment& s = segments.front();
-    v_prior = particle.speed_mps + s.v_mps;
+    v_prior = particle.speed_mps + imu_speed_change_;
     u = Eigen::Vector2d(std::cos(mu.heading + 0.5 * s.w_radps * s.dt_s),
                         std::sin(mu.heading + 0.5 * s.w_radps * s.dt_s));
     mu = common::UnicycleStep(mu, v_prior, s.w_radps, s.dt_s);

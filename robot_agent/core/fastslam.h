@@ -110,8 +110,7 @@ class FastSlam : public SlamFilter {
     int landmark_id = -1;
     int index = 0;  // position in the sorted scan
   };
-  // A piece of the step's motion. From the IMU, v_mps is not a speed but the step's change of
-  // speed (mean accel_x times dt), applied to each particle's own speed.
+  // A piece of the step's motion (from the IMU, v_mps is unused: each particle has its speed).
   struct Segment {
     double v_mps, w_radps, dt_s;
   };
@@ -170,8 +169,9 @@ class FastSlam : public SlamFilter {
   Eigen::Matrix3d pose_covariance_;
   std::uint32_t step_ = 0;
   double time_s_ = 0.0;
-  bool imu_step_ = false;       // this step's motion comes from the IMU
-  double imu_speed_var_ = 0.0;  // IMU: variance of a step's change of speed, sd_a^2 dt^2 / n
+  bool imu_step_ = false;          // this step's motion comes from the IMU
+  double imu_speed_change_ = 0.0;  // IMU: the step's change of speed, mean(accel_x) dt
+  double imu_speed_var_ = 0.0;     // and its variance, sd_a^2 dt^2 / n
   // filter.odometry_lag_s > 0: recent odometry segments (scaled), to replay them lag_s later.
   std::deque<common::OdometrySegment> odometry_history_;
   std::uint32_t next_track_id_ = 1;
