@@ -1,5 +1,6 @@
 #include "robot_agent/core/landmark_ekf.h"
 
+#include <algorithm>
 #include <cstring>
 #include <limits>
 
@@ -10,31 +11,44 @@
 namespace mrslam::robot_agent {
 namespace {
 
-// The update kernel over n gathered updates (rows as in UpdateBatch), kW lanes at a time.
+// The update kernel over n queued updates, kW at a time: each lane's state is loaded from its
+// block, updated, and stored back; lanes beyond n repeat the last update and are not stored. The
+// state fields of the blocks kAhead updates on are requested in advance: the blocks of many
+// particles do not all stay in cache between the filter's gating and here.
 template <typename T, int D>
-MRSLAM_LANE_INLINE void UpdateRows(double* const* in, double* const* state, int n, double var_r, double var_b) {
+MRSLAM_LANE_INLINE void UpdateTargets(LandmarkBlock<D>* const* blocks, const int* lanes, const double* const* in, int n,
+                                      double var_r, double var_b) {
   constexpr int kW = sizeof(T) / sizeof(double);
+  constexpr int kState = D + TriangleSize(D);
+  constexpr int kAhead = 16;
   for (int k = 0; k < n; k += kW) {
-    T mean[D], cov[TriangleSize(D)], pose_z[5];
-    for (int i = 0; i < D; ++i) std::memcpy(&mean[i], state[i] + k, sizeof(T));
-    for (int i = 0; i < TriangleSize(D); ++i) std::memcpy(&cov[i], state[D + i] + k, sizeof(T));
+    for (int l = 0; l < kW && k + kAhead + l < n; ++l) {
+      for (int f = 0; f < kState; ++f) __builtin_prefetch(&blocks[k + kAhead + l]->field[f][0]);
+    }
+    T state[kState], pose_z[5];
+    for (int l = 0; l < kW; ++l) {
+      const int j = std::min(k + l, n - 1);
+      for (int f = 0; f < kState; ++f) state[f][l] = blocks[j]->field[f][lanes[j]];
+    }
     for (int i = 0; i < 5; ++i) std::memcpy(&pose_z[i], in[i] + k, sizeof(T));
-    EkfUpdate<T, D>(mean, cov, pose_z[0], pose_z[1], pose_z[2], pose_z[3], pose_z[4], var_r, var_b);
-    for (int i = 0; i < D; ++i) std::memcpy(state[i] + k, &mean[i], sizeof(T));
-    for (int i = 0; i < TriangleSize(D); ++i) std::memcpy(state[D + i] + k, &cov[i], sizeof(T));
+    EkfUpdate<T, D>(state, state + D, pose_z[0], pose_z[1], pose_z[2], pose_z[3], pose_z[4], var_r, var_b);
+    for (int l = 0; l < kW && k + l < n; ++l) {
+      for (int f = 0; f < kState; ++f) blocks[k + l]->field[f][lanes[k + l]] = state[f][l];
+    }
   }
 }
 
 template <int D>
-void UpdateRowsSse2(double* const* in, double* const* state, int n, double var_r, double var_b) {
-  UpdateRows<Double2, D>(in, state, n, var_r, var_b);
+void UpdateTargetsSse2(LandmarkBlock<D>* const* blocks, const int* lanes, const double* const* in, int n, double var_r,
+                       double var_b) {
+  UpdateTargets<Double2, D>(blocks, lanes, in, n, var_r, var_b);
 }
 
 #if defined(__x86_64__)
 template <int D>
-__attribute__((target("avx2"))) void UpdateRowsAvx2(double* const* in, double* const* state, int n, double var_r,
-                                                    double var_b) {
-  UpdateRows<Double4, D>(in, state, n, var_r, var_b);
+__attribute__((target("avx2"))) void UpdateTargetsAvx2(LandmarkBlock<D>* const* blocks, const int* lanes,
+                                                       const double* const* in, int n, double var_r, double var_b) {
+  UpdateTargets<Double4, D>(blocks, lanes, in, n, var_r, var_b);
 }
 bool HasAvx2() {
   static const bool has = __builtin_cpu_supports("avx2");
@@ -256,36 +270,30 @@ template <int D>
 UpdateBatch<D>::UpdateBatch(double var_r, double var_b)
     : var_r_(var_r),
       var_b_(var_b),
-      targets_(kFlushSize),
-      rows_(static_cast<std::size_t>(kInputs + kState) * kRowStride) {}
+      blocks_(kFlushSize),
+      lanes_(kFlushSize),
+      rows_(static_cast<std::size_t>(kInputs) * kRowStride) {}
 
 template <int D>
 void UpdateBatch<D>::Run() {
   const int n = size_;
   if (n == 0) return;
-  // Padding lanes up to a multiple of 4 repeat the last update and are not scattered.
+  // Input lanes up to a multiple of 4 repeat the last update (the kernels do not store them).
   const int padded = (n + 3) / 4 * 4;
   for (int k = n; k < padded; ++k) {
     for (int i = 0; i < kInputs; ++i) Input(i, k) = Input(i, n - 1);
-    for (int f = 0; f < kState; ++f) State(f, k) = State(f, n - 1);
   }
-  double* in[kInputs];
-  double* state[kState];
+  const double* in[kInputs];
   for (int i = 0; i < kInputs; ++i) in[i] = &Input(i, 0);
-  for (int f = 0; f < kState; ++f) state[f] = &State(f, 0);
 #if defined(__x86_64__)
   if (HasAvx2()) {
-    UpdateRowsAvx2<D>(in, state, padded, var_r_, var_b_);
+    UpdateTargetsAvx2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
   } else {
-    UpdateRowsSse2<D>(in, state, padded, var_r_, var_b_);
+    UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
   }
 #else
-  UpdateRowsSse2<D>(in, state, padded, var_r_, var_b_);
+  UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
 #endif
-  // Scatter.
-  for (int k = 0; k < n; ++k) {
-    for (int f = 0; f < kState; ++f) targets_[k].block->field[f][targets_[k].lane] = State(f, k);
-  }
   size_ = 0;
 }
 

@@ -301,11 +301,12 @@ template <int D>
 void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& pose, const Eigen::Matrix3d& pose_cov,
                double z_r, double z_b, double var_r, double var_b, bool euclidean, double* d2);
 
-// A batch of landmark EKF updates across particles: gathers each (block, lane, pose, z) into
-// contiguous arrays, runs EkfUpdate two lanes at a time, and scatters the results back. The
-// filter queues every update of a step here; the blocks must stay alive and not move until Run.
-// A lane may be queued at most once per Run. Add runs the batch by itself every kFlushSize
-// updates, which keeps the gathered arrays in cache.
+// A batch of landmark EKF updates across particles: queues each (block, lane, pose, z), then
+// runs EkfUpdate four lanes at a time (two without AVX2), loading each lane's state from its
+// block into a vector register and storing the result straight back. The filter queues every
+// update of a step here; the blocks must stay alive and not move until Run. A lane may be queued
+// at most once per Run. Add runs the batch by itself every kFlushSize updates, which keeps the
+// queued inputs in cache.
 template <int D>
 class UpdateBatch {
  public:
@@ -315,36 +316,30 @@ class UpdateBatch {
   int size() const { return size_; }
 
  private:
-  struct Target {
-    LandmarkBlock<D>* block;
-    int lane;
-  };
-  static constexpr int kInputs = 5;  // xr, yr, phi, z_r, z_b
-  static constexpr int kState = D + TriangleSize(D);
+  static constexpr int kInputs = 5;        // xr, yr, phi, z_r, z_b
   static constexpr int kFlushSize = 1024;  // a multiple of 4: padding lanes fit in the stride
   // Rows of kFlushSize values, one cache line apart beyond a multiple of 4 KiB so that the rows
   // do not all fall into one L1 set.
   static constexpr int kRowStride = kFlushSize + 8;
   double& Input(int i, int k) { return rows_[static_cast<std::size_t>(i) * kRowStride + k]; }
-  double& State(int f, int k) { return rows_[static_cast<std::size_t>(kInputs + f) * kRowStride + k]; }
 
   double var_r_, var_b_;
   int size_ = 0;
-  std::vector<Target> targets_;  // kFlushSize
-  std::vector<double> rows_;     // kInputs input rows, then kState state rows
+  std::vector<LandmarkBlock<D>*> blocks_;  // kFlushSize
+  std::vector<int> lanes_;                 // kFlushSize
+  std::vector<double> rows_;               // kInputs input rows
 };
 
 template <int D>
 inline void UpdateBatch<D>::Add(LandmarkBlock<D>* block, int lane, const common::Pose2& pose, double z_r, double z_b) {
-  // Gather now, while the block is in cache.
   const int k = size_;
-  targets_[k] = {block, lane};
+  blocks_[k] = block;
+  lanes_[k] = lane;
   Input(0, k) = pose.x;
   Input(1, k) = pose.y;
   Input(2, k) = pose.heading;
   Input(3, k) = z_r;
   Input(4, k) = z_b;
-  for (int f = 0; f < kState; ++f) State(f, k) = block->field[f][lane];
   if (++size_ == kFlushSize) Run();
 }
 
