@@ -6,10 +6,12 @@
 //     squared error against the true landmark it stands for (LandmarkErrors),
 //   dead-reckoning RMSE (m): odometry integrated from the known initial pose.
 // Prints the median and 90th percentile over seeds per robot, optionally writes them (and the
-// per-seed values) as JSON. Progress goes to stderr.
+// per-seed values) as JSON. Progress goes to stderr. With --reference, the approximately ideal
+// filter (MapReference: batch MAP with oracle association and kinematics) replaces each robot's
+// own filter, on the same data (the lidar reports identities; nothing else changes).
 //
 //   mrslam_batch --scenario FILE --seeds A..B [--set k=v]... [--particles N] [--threads T]
-//                [--json FILE]
+//                [--reference] [--json FILE]
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -30,6 +32,7 @@
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
 #include "robot_agent/core/slam_filter.h"
+#include "scripts/batch/map_reference.h"
 #include "world_sim/core/step_source.h"
 #include "world_sim/evaluator/metrics.h"
 
@@ -76,19 +79,52 @@ std::pair<std::uint64_t, std::uint64_t> ParseSeeds(const std::string& text) {
   }
 }
 
+// One robot's estimator in a run: its own filter, or the reference.
+class Estimator {
+ public:
+  Estimator(const common::ScenarioOptions& options, int robot_index, std::uint64_t seed, bool reference) {
+    if (reference) {
+      reference_ = std::make_unique<batch::MapReference>(options, robot_index);
+    } else {
+      filter_ = robot_agent::CreateFilter(options, options.robots[robot_index].id, seed);
+      if (!filter_) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
+    }
+  }
+  void Process(const common::SensorStep& step) {
+    if (filter_) {
+      filter_->Process(step);
+    } else {
+      reference_->Process(step);
+    }
+  }
+  common::Pose2 Pose() const { return filter_ ? filter_->Estimate().pose : reference_->Pose(); }
+  std::vector<evaluator::MapPoint> Map() const {
+    std::vector<evaluator::MapPoint> map;
+    if (filter_) {
+      for (const auto& l : filter_->Estimate().landmarks) map.push_back({l.mean.head<2>(), l.landmark_id});
+    } else {
+      for (const auto& [position, id] : reference_->Landmarks()) map.push_back({position, id});
+    }
+    return map;
+  }
+
+ private:
+  std::unique_ptr<robot_agent::SlamFilter> filter_;
+  std::unique_ptr<batch::MapReference> reference_;
+};
+
 // Runs one seed: the scenario's step source (the simulated World, or the replay of a recorded data
-// set) + one filter per robot; returns the metrics per robot (scenario order).
-std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t seed) {
+// set) + one estimator per robot; returns the metrics per robot (scenario order).
+std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t seed, bool reference) {
   options.seed = seed;
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
   const std::vector<std::pair<std::string, common::Pose2>> frames = source->Truth().frames;
   const std::size_t n = options.robots.size();
-  std::vector<std::unique_ptr<robot_agent::SlamFilter>> filters;
+  std::vector<Estimator> estimators;
   std::vector<common::Pose2> dead_reckoning;
-  for (const auto& robot : options.robots) {
-    filters.push_back(robot_agent::CreateFilter(options, robot.id, seed));
-    if (!filters.back()) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
-    dead_reckoning.push_back(robot_agent::InitialPoseInOwnFrame(robot));
+  for (std::size_t i = 0; i < n; ++i) {
+    estimators.emplace_back(options, static_cast<int>(i), seed, reference);
+    dead_reckoning.push_back(robot_agent::InitialPoseInOwnFrame(options.robots[i]));
   }
   std::vector<std::vector<double>> position(n), heading(n), landmark(n), dr(n);
   for (int k = 0; k < options.run.steps; ++k) {
@@ -101,13 +137,11 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
     for (std::size_t i = 0; i < n; ++i) {
       const common::Pose2& frame = frames[i].second;
       const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
-      filters[i]->Process(steps[i]);
-      const robot_agent::FilterEstimate e = filters[i]->Estimate();
-      position[i].push_back(evaluator::PositionError(e.pose, truth_own));
-      heading[i].push_back(common::DegFromRad(evaluator::HeadingError(e.pose, truth_own)));
-      std::vector<evaluator::MapPoint> map;
-      for (const auto& l : e.landmarks) map.push_back({l.mean.head<2>(), l.landmark_id});
-      for (const double err : evaluator::LandmarkErrors(map, true_landmarks, frame)) {
+      estimators[i].Process(steps[i]);
+      const common::Pose2 pose = estimators[i].Pose();
+      position[i].push_back(evaluator::PositionError(pose, truth_own));
+      heading[i].push_back(common::DegFromRad(evaluator::HeadingError(pose, truth_own)));
+      for (const double err : evaluator::LandmarkErrors(estimators[i].Map(), true_landmarks, frame)) {
         landmark[i].push_back(err);
       }
       for (const auto& s : steps[i].odometry.segments) {
@@ -131,12 +165,17 @@ int Main(int argc, char** argv) {
   std::string scenario_path, seeds_text = "1..50", json_path;
   std::vector<std::string> overrides;
   int particles = 0, threads = 1;
+  bool reference = false;
   app.add_option("--scenario", scenario_path, "Scenario YAML file")->required();
   app.add_option("--seeds", seeds_text, "Seed range A..B (inclusive)");
   app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
   app.add_option("--particles", particles, "Particles per filter (overrides filter.particles)")
       ->check(CLI::Range(1, 1000000));
   app.add_option("--threads", threads, "Seeds run in parallel")->check(CLI::Range(1, 256));
+  app.add_flag("--reference", reference,
+               "Run the approximately ideal reference instead of the filter: the batch MAP estimate of the "
+               "path so far at every step, with oracle association and landmark kinematics (static or "
+               "unicycle landmarks)");
   app.add_option("--json", json_path, "Write medians, 90th percentiles and per-seed values here");
   try {
     app.parse(argc, argv);
@@ -147,6 +186,8 @@ int Main(int argc, char** argv) {
   const auto [first_seed, last_seed] = ParseSeeds(seeds_text);
   common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);
   if (particles > 0) options.filter.particles = particles;
+  // The reference's oracle association: the same detections, with their identities.
+  if (reference) options.sensors.lidar.report_identity = true;
   const int num_seeds = static_cast<int>(last_seed - first_seed + 1);
 
   // Worker threads take seeds from a shared counter; results land in seed order.
@@ -158,7 +199,7 @@ int Main(int argc, char** argv) {
   auto worker = [&]() {
     for (int s = next++; s < num_seeds; s = next++) {
       try {
-        results[s] = RunSeed(options, first_seed + s);
+        results[s] = RunSeed(options, first_seed + s, reference);
       } catch (const std::exception& e) {
         const std::lock_guard<std::mutex> lock(error_mutex);
         error = e.what();
@@ -180,12 +221,15 @@ int Main(int argc, char** argv) {
   nlohmann::json json;
   json["scenario"] = options.name;
   json["seeds"] = {first_seed, last_seed};
+  const std::string estimator =
+      reference ? std::string("the MAP reference")
+                : options.filter.type + " with " + std::to_string(options.filter.particles) + " particles";
   json["particles"] = options.filter.particles;
-  json["filter"] = options.filter.type;
-  std::printf("scenario %s, seeds %llu..%llu, %s with %d particles\n", options.name.c_str(),
+  json["filter"] = reference ? std::string("reference") : options.filter.type;
+  std::printf("scenario %s, seeds %llu..%llu, %s\n", options.name.c_str(),
               static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
               static_cast<unsigned long long>(last_seed),   // NOLINT(runtime/int)
-              options.filter.type.c_str(), options.filter.particles);
+              estimator.c_str());
   std::printf("%-6s %-24s %10s %10s\n", "robot", "metric", "median", "p90");
   for (std::size_t i = 0; i < options.robots.size(); ++i) {
     const std::string& id = options.robots[i].id;

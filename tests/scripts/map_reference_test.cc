@@ -1,0 +1,113 @@
+#include "scripts/batch/map_reference.h"
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "common/config/scenario_options.h"
+#include "common/se2.h"
+#include "robot_agent/core/slam_filter.h"
+#include "world_sim/core/step_source.h"
+
+namespace mrslam::batch {
+namespace {
+
+const std::string kPaperScenario = std::string(MRSLAM_TEST_SOURCE_DIR) + "/config/paper_two_robots.yaml";
+
+common::ScenarioOptions PaperScenario(std::vector<std::string> overrides = {}) {
+  overrides.push_back("sensors.lidar.report_identity=true");
+  return common::LoadScenario(kPaperScenario, overrides);
+}
+
+// Position RMSE over a run of robot r1 in its own frame, for the reference and (if filter_type is
+// not empty) for that filter on the same data.
+struct RunErrors {
+  double reference = 0.0, filter = 0.0, dead_reckoning = 0.0;
+  double worst_reference = 0.0, worst_landmark = 0.0;
+};
+RunErrors RunR1(const common::ScenarioOptions& options, bool with_filter) {
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
+  const common::Pose2 frame = source->Truth().frames.at(0).second;
+  MapReference reference(options, 0);
+  std::unique_ptr<robot_agent::SlamFilter> filter;
+  if (with_filter) filter = robot_agent::CreateFilter(options, "r1", options.seed);
+  common::Pose2 dead_reckoning = robot_agent::InitialPoseInOwnFrame(options.robots[0]);
+  RunErrors e;
+  for (int k = 0; k < options.run.steps; ++k) {
+    const common::SensorStep step = source->Step().at(0);
+    const common::GroundTruth truth = source->Truth();
+    const common::Pose2 own = common::Compose(common::Inverse(frame), truth.robots[0].pose);
+    reference.Process(step);
+    const double err = (reference.Pose().Translation() - own.Translation()).norm();
+    e.reference += err * err;
+    e.worst_reference = std::max(e.worst_reference, err);
+    for (const auto& [position, id] : reference.Landmarks()) {
+      for (const auto& l : truth.landmarks) {
+        if (std::stoi(l.id) != id) continue;
+        const Eigen::Vector2d true_own = common::Compose(common::Inverse(frame), l.pose).Translation();
+        e.worst_landmark = std::max(e.worst_landmark, (position - true_own).norm());
+      }
+    }
+    if (filter) {
+      filter->Process(step);
+      e.filter += (filter->Estimate().pose.Translation() - own.Translation()).squaredNorm();
+    }
+    for (const auto& s : step.odometry.segments) {
+      dead_reckoning = common::UnicycleStep(dead_reckoning, s.v_mps, s.w_radps, s.dt_s);
+    }
+    e.dead_reckoning += (dead_reckoning.Translation() - own.Translation()).squaredNorm();
+  }
+  e.reference = std::sqrt(e.reference / options.run.steps);
+  e.filter = std::sqrt(e.filter / options.run.steps);
+  e.dead_reckoning = std::sqrt(e.dead_reckoning / options.run.steps);
+  return e;
+}
+
+TEST(MapReference, IsExactWithoutNoise) {
+  // Noise a million times below the scenario's: the MAP path and landmarks are the true ones.
+  const common::ScenarioOptions o = PaperScenario(
+      {"noise.robot_process_var=[1e-12, 1e-12, 1e-12]", "noise.landmark_process_var=[1e-12, 1e-12, 1e-12]",
+       "sensors.lidar.range_noise_sd_m=1e-6", "sensors.lidar.bearing_noise_sd_rad=1e-6"});
+  const RunErrors e = RunR1(o, /*with_filter=*/false);
+  EXPECT_LT(e.worst_reference, 1e-3);
+  EXPECT_LT(e.worst_landmark, 1e-3);
+  EXPECT_GT(e.worst_landmark, 0.0);  // landmarks were seen and scored
+}
+
+TEST(MapReference, BeatsTheParticleFilterOnTheSameData) {
+  // The reference is the yardstick of the FastSLAM accuracy target: on average over seeds it
+  // must do better than the filter, and far better than dead reckoning.
+  double reference = 0.0, filter = 0.0, dead_reckoning = 0.0;
+  for (int seed = 1; seed <= 5; ++seed) {
+    common::ScenarioOptions o = PaperScenario();
+    o.seed = seed;
+    const RunErrors e = RunR1(o, /*with_filter=*/true);
+    reference += e.reference / 5;
+    filter += e.filter / 5;
+    dead_reckoning += e.dead_reckoning / 5;
+  }
+  EXPECT_LT(reference, filter);
+  EXPECT_LT(reference, 0.5 * dead_reckoning);
+}
+
+TEST(MapReference, RejectsWhatItCannotModel) {
+  const common::ScenarioOptions field =
+      common::LoadScenario(std::string(MRSLAM_TEST_SOURCE_DIR) + "/config/dynamic_world.yaml", {});
+  EXPECT_THROW(MapReference(field, 0), std::invalid_argument);
+
+  const common::ScenarioOptions anonymous = common::LoadScenario(kPaperScenario, {});
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(anonymous);
+  MapReference reference(anonymous, 0);
+  common::SensorStep step;
+  do {
+    step = source->Step().at(0);
+  } while (step.lidar.landmarks.empty());
+  EXPECT_THROW(reference.Process(step), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace mrslam::batch
