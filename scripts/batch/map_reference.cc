@@ -62,11 +62,16 @@ Eigen::Matrix3d NumericJacobian(const G& g, const Pose2& x) {
 }  // namespace
 
 MapReference::MapReference(const common::ScenarioOptions& options, int robot_index)
+    : MapReference(options, std::vector<int>{robot_index}, {}, 0) {}
+
+MapReference::MapReference(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
+                           const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step)
     : dt_s_(options.run.dt_s),
       robot_var_(options.noise.robot_process_var),
       landmark_var_(options.noise.landmark_process_var),
       var_r_(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
-      var_b_(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad) {
+      var_b_(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad),
+      robot_detections_from_step_(robot_detections_from_step) {
   for (const auto& l : options.landmarks) {
     Kinematics k;
     if (l.motion.model == common::LandmarkMotionModel::kUnicycle) {
@@ -80,12 +85,18 @@ MapReference::MapReference(const common::ScenarioOptions& options, int robot_ind
   if (options.landmark_field.enabled) {
     throw std::invalid_argument("the reference knows listed landmarks only, not a landmark_field");
   }
-  path_.push_back(robot_agent::InitialPoseInOwnFrame(options.robots.at(robot_index)));
+  if (robot_indices.empty() || first_pose_guesses.size() + 1 != robot_indices.size()) {
+    throw std::invalid_argument("the reference needs one first-pose guess per robot after the first");
+  }
+  for (std::size_t r = 0; r < robot_indices.size(); ++r) {
+    const common::RobotOptions& robot = options.robots.at(robot_indices[r]);
+    robots_.push_back({robot.id, {r == 0 ? robot_agent::InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]}, {}});
+  }
 }
 
-Pose2 MapReference::StepRobot(const Pose2& x, int t) const {
+Pose2 MapReference::StepRobot(const Robot& robot, const Pose2& x, int t) const {
   Pose2 out = x;
-  for (const auto& s : odometry_[t - 1]) out = common::UnicycleStep(out, s.v_mps, s.w_radps, s.dt_s);
+  for (const auto& s : robot.odometry[t - 1]) out = common::UnicycleStep(out, s.v_mps, s.w_radps, s.dt_s);
   return out;
 }
 
@@ -93,62 +104,90 @@ Pose2 MapReference::StepLandmark(const Pose2& l, const Kinematics& k) const {
   return k.is_static ? l : common::UnicycleStep(l, k.v_mps, k.w_radps, dt_s_);
 }
 
-void MapReference::Process(const common::SensorStep& step) {
-  odometry_.push_back(step.odometry.segments);
-  const int t = static_cast<int>(path_.size());
-  path_.push_back(StepRobot(path_.back(), t));
+void MapReference::Process(const std::vector<common::SensorStep>& steps) {
+  if (steps.size() != robots_.size()) throw std::invalid_argument("the reference needs one step per robot");
+  const int t = static_cast<int>(robots_.front().path.size());
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    Robot& robot = robots_[r];
+    robot.odometry.push_back(steps[r].odometry.segments);
+    robot.path.push_back(StepRobot(robot, robot.path.back(), t));
+  }
   for (auto& [id, chain] : chains_) chain.states.push_back(StepLandmark(chain.states.back(), chain.kinematics));
-  for (const auto& d : step.lidar.landmarks) {
-    if (d.landmark_id < 0) throw std::invalid_argument("the reference needs detections with identities");
-    const auto known = kinematics_.find(d.landmark_id);
-    if (known == kinematics_.end() || !std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad)) continue;
-    readings_.push_back({t, d.landmark_id, d.range_m, d.bearing_rad});
-    const Eigen::Vector2d point = common::PointFromRangeBearing(path_.back(), {d.range_m, d.bearing_rad});
-    auto [it, created] = chains_.try_emplace(d.landmark_id);
-    Chain& chain = it->second;
-    if (created) {
-      chain.first_step = t;
-      chain.kinematics = known->second;
-      chain.states.push_back({point.x(), point.y(), 0.0});
-    } else if (chain.sightings == 1 && !chain.kinematics.is_static) {
-      // Second sighting: the heading from the displacement since the first (the chord of the
-      // arc turns by w dt / 2 per step less than the heading at its end), then the chain again.
-      const int steps = t - chain.first_step;
-      const Pose2& first = chain.states.front();
-      if (steps > 0) {
-        const double chord = std::atan2(point.y() - first.y, point.x() - first.x);
-        Pose2 l{first.x, first.y, WrapAngle(chord - 0.5 * chain.kinematics.w_radps * dt_s_ * (steps + 1))};
-        for (auto& state : chain.states) {
-          state = l;
-          l = StepLandmark(l, chain.kinematics);
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    for (const auto& d : steps[r].lidar.landmarks) AddLandmarkReading(static_cast<int>(r), t, d);
+    if (t < robot_detections_from_step_) continue;
+    for (const auto& d : steps[r].lidar.robots) {
+      for (std::size_t seen = 0; seen < robots_.size(); ++seen) {
+        if (seen != r && robots_[seen].id == d.seen_robot_id && std::isfinite(d.range_m) &&
+            std::isfinite(d.bearing_rad)) {
+          readings_.push_back({t, static_cast<int>(r), -1, static_cast<int>(seen), d.range_m, d.bearing_rad});
         }
       }
     }
-    ++chain.sightings;
   }
   Solve();
 }
 
+void MapReference::AddLandmarkReading(int r, int t, const common::LandmarkDetection& d) {
+  if (d.landmark_id < 0) throw std::invalid_argument("the reference needs detections with identities");
+  const auto known = kinematics_.find(d.landmark_id);
+  if (known == kinematics_.end() || !std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad)) return;
+  readings_.push_back({t, r, d.landmark_id, -1, d.range_m, d.bearing_rad});
+  const Eigen::Vector2d point = common::PointFromRangeBearing(robots_[r].path.back(), {d.range_m, d.bearing_rad});
+  auto [it, created] = chains_.try_emplace(d.landmark_id);
+  Chain& chain = it->second;
+  if (created) {
+    chain.first_step = t;
+    chain.kinematics = known->second;
+    chain.states.push_back({point.x(), point.y(), 0.0});
+  } else if (chain.sightings == 1 && !chain.kinematics.is_static && t > chain.first_step) {
+    // Second sighting: the heading from the displacement since the first (the chord of the arc
+    // turns by w dt / 2 per step less than the heading at its end), then the chain again.
+    const int steps = t - chain.first_step;
+    const Pose2& first = chain.states.front();
+    const double chord = std::atan2(point.y() - first.y, point.x() - first.x);
+    Pose2 l{first.x, first.y, WrapAngle(chord - 0.5 * chain.kinematics.w_radps * dt_s_ * (steps + 1))};
+    for (auto& state : chain.states) {
+      state = l;
+      l = StepLandmark(l, chain.kinematics);
+    }
+  }
+  ++chain.sightings;
+}
+
 void MapReference::Solve() {
-  // Columns: robot poses 1..T, then every chain's states in id order.
-  const int steps = static_cast<int>(path_.size()) - 1;
+  // Columns: every robot's poses (the first robot's from step 1, the others' from their first
+  // pose), then every chain's states in id order.
+  const int steps = static_cast<int>(robots_.front().path.size()) - 1;
+  std::vector<int> robot_base(robots_.size());
+  int cols = 0;
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    robot_base[r] = cols;
+    cols += 3 * (r == 0 ? steps : steps + 1);
+  }
   std::map<int, int> chain_col;
-  int cols = 3 * steps;
   for (const auto& [id, chain] : chains_) {
     chain_col[id] = cols;
     cols += 3 * static_cast<int>(chain.states.size());
   }
-  auto robot_col = [](int t) { return t == 0 ? -1 : 3 * (t - 1); };
+  auto robot_col = [&](int r, int t) {
+    if (r == 0) return t == 0 ? -1 : robot_base[0] + 3 * (t - 1);
+    return robot_base[r] + 3 * t;
+  };
   const Eigen::Vector3d robot_w = robot_var_.unaryExpr(&Sd).cwiseInverse();
   const Eigen::Vector3d landmark_w = landmark_var_.unaryExpr(&Sd).cwiseInverse();
   const Eigen::Vector2d z_w(1.0 / Sd(var_r_), 1.0 / Sd(var_b_));
 
   auto build = [&](Rows* rows) {
-    for (int t = 1; t <= steps; ++t) {
-      const auto f = [&](const Pose2& x) { return StepRobot(x, t); };
-      const Eigen::Vector3d r = robot_w.asDiagonal() * Minus(path_[t], f(path_[t - 1]));
-      const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * NumericJacobian(f, path_[t - 1]));
-      rows->Add(r, {{robot_col(t), Eigen::MatrixXd(robot_w.asDiagonal())}, {robot_col(t - 1), jf}});
+    for (std::size_t r = 0; r < robots_.size(); ++r) {
+      const Robot& robot = robots_[r];
+      const int ri = static_cast<int>(r);
+      for (int t = 1; t <= steps; ++t) {
+        const auto f = [&](const Pose2& x) { return StepRobot(robot, x, t); };
+        const Eigen::Vector3d res = robot_w.asDiagonal() * Minus(robot.path[t], f(robot.path[t - 1]));
+        const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * NumericJacobian(f, robot.path[t - 1]));
+        rows->Add(res, {{robot_col(ri, t), Eigen::MatrixXd(robot_w.asDiagonal())}, {robot_col(ri, t - 1), jf}});
+      }
     }
     for (const auto& [id, chain] : chains_) {
       const int base = chain_col[id];
@@ -161,26 +200,32 @@ void MapReference::Solve() {
       // A static landmark stays put: a stiff constraint between its steps' states.
       const Eigen::Vector3d w = k.is_static ? Eigen::Vector3d::Constant(1e4) : landmark_w;
       for (std::size_t i = 1; i < chain.states.size(); ++i) {
-        const Eigen::Vector3d r = w.asDiagonal() * Minus(chain.states[i], f(chain.states[i - 1]));
+        const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], f(chain.states[i - 1]));
         const Eigen::Matrix3d jf = -(w.asDiagonal() * NumericJacobian(f, chain.states[i - 1]));
         const int col = base + 3 * static_cast<int>(i);
-        rows->Add(r, {{col, Eigen::MatrixXd(w.asDiagonal())}, {col - 3, jf}});
+        rows->Add(res, {{col, Eigen::MatrixXd(w.asDiagonal())}, {col - 3, jf}});
       }
     }
     for (const Reading& z : readings_) {
-      const Chain& chain = chains_.at(z.landmark_id);
-      const Pose2& x = path_[z.step];
-      const Pose2& l = chain.states[z.step - chain.first_step];
-      const double dx = l.x - x.x, dy = l.y - x.y, q = dx * dx + dy * dy, range = std::sqrt(q);
-      const Eigen::Vector2d r(z_w(0) * (z.range_m - range),
-                              z_w(1) * WrapAngle(z.bearing_rad - (std::atan2(dy, dx) - x.heading)));
+      const Pose2& x = robots_[z.robot].path[z.step];
+      Eigen::Vector2d p;
+      int target_col = 0;
+      if (z.landmark_id >= 0) {
+        const Chain& chain = chains_.at(z.landmark_id);
+        p = chain.states[z.step - chain.first_step].Translation();
+        target_col = chain_col[z.landmark_id] + 3 * (z.step - chain.first_step);
+      } else {
+        p = robots_[z.seen].path[z.step].Translation();
+        target_col = robot_col(z.seen, z.step);
+      }
+      const double dx = p.x() - x.x, dy = p.y() - x.y, q = dx * dx + dy * dy, range = std::sqrt(q);
+      const Eigen::Vector2d res(z_w(0) * (z.range_m - range),
+                                z_w(1) * WrapAngle(z.bearing_rad - (std::atan2(dy, dx) - x.heading)));
       // Jacobians of the residual (z - h): -dh.
-      Eigen::MatrixXd jx(2, 3), jl(2, 3);
+      Eigen::MatrixXd jx(2, 3), jp(2, 3);
       jx << dx / range, dy / range, 0.0, -dy / q, dx / q, 1.0;
-      jl << -dx / range, -dy / range, 0.0, dy / q, -dx / q, 0.0;
-      jx = z_w.asDiagonal() * jx;
-      jl = z_w.asDiagonal() * jl;
-      rows->Add(r, {{robot_col(z.step), jx}, {chain_col[z.landmark_id] + 3 * (z.step - chain.first_step), jl}});
+      jp << -dx / range, -dy / range, 0.0, dy / q, -dx / q, 0.0;
+      rows->Add(res, {{robot_col(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
     }
   };
   auto cost = [](const Rows& rows) {
@@ -189,8 +234,11 @@ void MapReference::Solve() {
     return c;
   };
   auto apply = [&](const Eigen::VectorXd& delta, double sign) {
-    for (int t = 1; t <= steps; ++t) {
-      path_[t] = Pose2::FromVector(path_[t].Vector() + sign * delta.segment<3>(robot_col(t)));
+    for (std::size_t r = 0; r < robots_.size(); ++r) {
+      for (int t = r == 0 ? 1 : 0; t <= steps; ++t) {
+        Pose2& x = robots_[r].path[t];
+        x = Pose2::FromVector(x.Vector() + sign * delta.segment<3>(robot_col(static_cast<int>(r), t)));
+      }
     }
     for (auto& [id, chain] : chains_) {
       for (std::size_t i = 0; i < chain.states.size(); ++i) {
@@ -199,7 +247,6 @@ void MapReference::Solve() {
       }
     }
   };
-
   double lambda = 1e-6;
   for (int iteration = 0; iteration < 30; ++iteration) {
     Rows rows;
@@ -228,10 +275,6 @@ void MapReference::Solve() {
     }
     lambda = std::max(lambda / 10.0, 1e-9);
     if (delta.cwiseAbs().maxCoeff() < 1e-7) break;
-  }
-  for (auto& x : path_) x.heading = WrapAngle(x.heading);
-  for (auto& [id, chain] : chains_) {
-    for (auto& l : chain.states) l.heading = WrapAngle(l.heading);
   }
 }
 

@@ -11,25 +11,39 @@
 
 namespace mrslam::batch {
 
-// The approximately ideal filter against which one robot's own filter is judged (mrslam_batch
-// --reference): at every step, the maximum a posteriori estimate of the robot's whole path and
-// every seen landmark's path so far, from all the odometry and detections so far, with oracle
-// knowledge a filter does not have: which landmark each detection is (the detections must carry
-// identities) and each landmark's true kinematics (static or unicycle with its (v, w)). The
-// models are the simulator's: x_t = f(x_{t-1}, u_t) + N(0, diag(noise.robot_process_var)),
+// The approximately ideal estimator against which the agents are judged (mrslam_batch
+// --reference, mrslam_batch --transform-reference): at every step, the maximum a posteriori
+// estimate of the whole path so far of one robot, or of several robots at once, and of every
+// seen landmark's path, from all their odometry and detections so far, with oracle knowledge a
+// filter does not have: which landmark each detection is (the detections must carry identities)
+// and each landmark's true kinematics (static or unicycle with its (v, w)). The models are the
+// simulator's: x_t = f(x_{t-1}, u_t) + N(0, diag(noise.robot_process_var)),
 // l_t = f(l_{t-1}; v, w) + N(0, diag(noise.landmark_process_var)) (static: l_t = l_{t-1}),
-// z = (|l - x|, atan2(l - x) - heading) + N(0, diag(sd_r^2, sd_b^2)), f the unicycle step; the
-// robot's first pose is known. Solved by Gauss-Newton with Levenberg damping on the sparse
-// normal equations, warm-started from the previous step's solution. A landmark's heading is
-// started at its second sighting from the displacement between the two sightings.
-// Pure; not thread-safe.
+// z = (|p - x|, atan2(p - x) - heading) + N(0, diag(sd_r^2, sd_b^2)) for a landmark or robot at
+// p, f the unicycle step. The first robot's first pose is known and anchors the frame (its own
+// frame G_i); the first poses of the others in it are unknowns without a prior, so what places
+// them is only what the data say (common landmarks, detections of each other). Solved by
+// Gauss-Newton with Levenberg damping on the sparse normal equations, warm-started from the
+// previous step's solution. A landmark's heading is started at its second sighting from the
+// displacement between the two sightings. Pure; not thread-safe.
 class MapReference {
  public:
-  // Throws std::invalid_argument for landmark models other than static and unicycle.
+  // One robot, in its own frame. Throws std::invalid_argument for landmark models other than
+  // static and unicycle, or a landmark_field.
   MapReference(const common::ScenarioOptions& options, int robot_index);
+  // Several robots (scenario indices; the first anchors the frame). first_pose_guesses: one per
+  // further robot, its first pose in the first robot's frame to start the solver from (any
+  // guess within the solver's reach: only the data decide the result). Detections of each other
+  // count from step robot_detections_from_step on.
+  MapReference(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
+               const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step);
 
-  void Process(const common::SensorStep& step);
-  const common::Pose2& Pose() const { return path_.back(); }
+  // One sensor step per robot of the set, in the set's order.
+  void Process(const std::vector<common::SensorStep>& steps);
+  void Process(const common::SensorStep& step) { Process(std::vector<common::SensorStep>{step}); }
+  // Robot r of the set (0: the first): its current pose and its first pose, in the frame.
+  const common::Pose2& Pose(int r = 0) const { return robots_.at(r).path.back(); }
+  const common::Pose2& FirstPose(int r) const { return robots_.at(r).path.front(); }
   // The current position of every landmark seen so far, with its identity.
   std::vector<std::pair<Eigen::Vector2d, int>> Landmarks() const;
 
@@ -44,21 +58,29 @@ class MapReference {
     std::vector<common::Pose2> states;
     int sightings = 0;
   };
+  struct Robot {
+    std::string id;
+    std::vector<common::Pose2> path;                             // path[0]: the first pose
+    std::vector<std::vector<common::OdometrySegment>> odometry;  // odometry[t - 1]: step t's commands
+  };
   struct Reading {
-    int step, landmark_id;
+    int step, robot;  // who read it, when
+    int landmark_id;  // a landmark, or -1: robot `seen` of the set
+    int seen;
     double range_m, bearing_rad;
   };
 
-  common::Pose2 StepRobot(const common::Pose2& x, int t) const;  // f(x_{t-1}, u_t)
+  common::Pose2 StepRobot(const Robot& robot, const common::Pose2& x, int t) const;  // f(x_{t-1}, u_t)
   common::Pose2 StepLandmark(const common::Pose2& l, const Kinematics& k) const;
+  void AddLandmarkReading(int r, int t, const common::LandmarkDetection& d);
   void Solve();
 
   double dt_s_;
   Eigen::Vector3d robot_var_, landmark_var_;
   double var_r_, var_b_;
-  std::map<int, Kinematics> kinematics_;                        // by landmark id
-  std::vector<common::Pose2> path_;                             // path_[0]: the known start
-  std::vector<std::vector<common::OdometrySegment>> odometry_;  // odometry_[t - 1]: step t's commands
+  int robot_detections_from_step_;
+  std::map<int, Kinematics> kinematics_;  // by landmark id
+  std::vector<Robot> robots_;
   std::map<int, Chain> chains_;
   std::vector<Reading> readings_;
 };

@@ -8,10 +8,14 @@
 // Prints the median and 90th percentile over seeds per robot, optionally writes them (and the
 // per-seed values) as JSON. Progress goes to stderr. With --reference, the approximately ideal
 // filter (MapReference: batch MAP with oracle association and kinematics) replaces each robot's
-// own filter, on the same data (the lidar reports identities; nothing else changes).
+// own filter, on the same data (the lidar reports identities; nothing else changes). With
+// --transform-reference it prints instead, per ordered pair of robots, the error of the transform
+// T(G_i <- G_j) at the end of their first encounter (DESIGN.md) as the joint MAP reference of
+// both robots holds it: the best that "everything both robots know" allows.
 //
 //   mrslam_batch --scenario FILE --seeds A..B [--set k=v]... [--particles N] [--threads T]
-//                [--reference] [--json FILE]
+//                [--reference | --transform-reference] [--json FILE]
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -160,38 +164,61 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
   return out;
 }
 
-int Main(int argc, char** argv) {
-  CLI::App app{"Accuracy of each robot's own filter over seeds (in-process, no DDS)."};
-  std::string scenario_path, seeds_text = "1..50", json_path;
-  std::vector<std::string> overrides;
-  int particles = 0, threads = 1;
-  bool reference = false;
-  app.add_option("--scenario", scenario_path, "Scenario YAML file")->required();
-  app.add_option("--seeds", seeds_text, "Seed range A..B (inclusive)");
-  app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
-  app.add_option("--particles", particles, "Particles per filter (overrides filter.particles)")
-      ->check(CLI::Range(1, 1000000));
-  app.add_option("--threads", threads, "Seeds run in parallel")->check(CLI::Range(1, 256));
-  app.add_flag("--reference", reference,
-               "Run the approximately ideal reference instead of the filter: the batch MAP estimate of the "
-               "path so far at every step, with oracle association and landmark kinematics (static or "
-               "unicycle landmarks)");
-  app.add_option("--json", json_path, "Write medians, 90th percentiles and per-seed values here");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+// The transform errors of one pair (i, j) in one seed, as the joint reference holds
+// T(G_i <- G_j) and T(G_j <- G_i) at the end of their first encounter (the detector's rule:
+// both detections within rendezvous.window_steps, from rendezvous.enable_from_step on; the end:
+// the last step of the run of consecutive steps with mutual detections, at most 10 steps).
+// NaN if they never meet. The reference counts their detections of each other from
+// enable_from_step on, and starts robot j's first pose from the truth displaced by (0.3 m,
+// 0.3 m, 5 deg): a result near that displacement would say the data do not place it.
+struct PairErrors {
+  double ij_m = std::nan(""), ij_deg = std::nan(""), ji_m = std::nan(""), ji_deg = std::nan("");
+};
+PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed, int i, int j) {
+  options.seed = seed;
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
+  const auto frames = source->Truth().frames;
+  const common::Pose2 true_ij = common::Between(frames[i].second, frames[j].second);
+  // T(G_i <- G_j) maps j's first pose in G_j to its first pose in G_i.
+  const common::Pose2 start_j = robot_agent::InitialPoseInOwnFrame(options.robots[j]);
+  const common::Pose2 guess = common::Compose(common::Compose(true_ij, start_j), {0.3, 0.3, common::kPi / 36});
+  batch::MapReference reference(options, {i, j}, {guess}, options.rendezvous.enable_from_step);
+  const std::string& id_i = options.robots[i].id;
+  const std::string& id_j = options.robots[j].id;
+  auto sees = [](const common::SensorStep& step, const std::string& id) {
+    return std::any_of(step.lidar.robots.begin(), step.lidar.robots.end(),
+                       [&](const common::RobotDetection& d) { return d.seen_robot_id == id; });
+  };
+  int last_ij = -1000000, last_ji = -1000000, fired = -1;
+  common::Pose2 held;
+  PairErrors out;
+  for (int k = 1; k <= options.run.steps; ++k) {
+    const std::vector<common::SensorStep> steps = source->Step();
+    reference.Process({steps[i], steps[j]});
+    const bool ij = sees(steps[i], id_j), ji = sees(steps[j], id_i);
+    if (ij) last_ij = k;
+    if (ji) last_ji = k;
+    const int w = options.rendezvous.window_steps;
+    if (fired < 0 && k >= options.rendezvous.enable_from_step && last_ij > k - w && last_ji > k - w) fired = k;
+    if (fired < 0) continue;
+    const bool in_run = k == fired || (ij && ji && k - fired < 10);
+    if (in_run) held = common::Compose(reference.FirstPose(1), common::Inverse(start_j));
+    if (!in_run || k == options.run.steps) {
+      const common::Pose2 held_ji = common::Inverse(held), true_ji = common::Inverse(true_ij);
+      out.ij_m = (held.Translation() - true_ij.Translation()).norm();
+      out.ij_deg = common::DegFromRad(std::abs(common::WrapAngle(held.heading - true_ij.heading)));
+      out.ji_m = (held_ji.Translation() - true_ji.Translation()).norm();
+      out.ji_deg = common::DegFromRad(std::abs(common::WrapAngle(held_ji.heading - true_ji.heading)));
+      break;
+    }
   }
+  return out;
+}
 
-  const auto [first_seed, last_seed] = ParseSeeds(seeds_text);
-  common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);
-  if (particles > 0) options.filter.particles = particles;
-  // The reference's oracle association: the same detections, with their identities.
-  if (reference) options.sensors.lidar.report_identity = true;
-  const int num_seeds = static_cast<int>(last_seed - first_seed + 1);
-
-  // Worker threads take seeds from a shared counter; results land in seed order.
-  std::vector<std::vector<RobotRun>> results(num_seeds);
+// Runs fn(s) for s in [0, num_seeds) on `threads` worker threads taking seeds from a shared
+// counter, with progress on stderr; the first error stops the others and is rethrown.
+template <typename Fn>
+void ForEachSeed(int num_seeds, int threads, const Fn& fn) {
   std::atomic<int> next{0};
   std::atomic<int> done{0};
   std::mutex error_mutex;
@@ -199,7 +226,7 @@ int Main(int argc, char** argv) {
   auto worker = [&]() {
     for (int s = next++; s < num_seeds; s = next++) {
       try {
-        results[s] = RunSeed(options, first_seed + s, reference);
+        fn(s);
       } catch (const std::exception& e) {
         const std::lock_guard<std::mutex> lock(error_mutex);
         error = e.what();
@@ -217,6 +244,97 @@ int Main(int argc, char** argv) {
   for (auto& t : pool) t.join();
   std::fprintf(stderr, "\n");
   if (!error.empty()) throw std::runtime_error(error);
+}
+
+void WriteJson(const nlohmann::json& json, const std::string& path) {
+  if (path.empty()) return;
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  out << json.dump(2) << "\n";
+}
+
+// --transform-reference: per ordered pair, median and 90th percentile over the seeds where the
+// pair met.
+int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds,
+                            int threads, const std::string& json_path) {
+  const int n = static_cast<int>(options.robots.size());
+  std::vector<std::pair<int, int>> pairs;
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) pairs.emplace_back(i, j);
+  }
+  std::vector<std::vector<PairErrors>> results(num_seeds);
+  ForEachSeed(num_seeds, threads, [&](int s) {
+    for (const auto& [i, j] : pairs) results[s].push_back(RunTransformSeed(options, first_seed + s, i, j));
+  });
+  nlohmann::json json;
+  json["scenario"] = options.name;
+  json["seeds"] = {first_seed, first_seed + num_seeds - 1};
+  std::printf("scenario %s, seeds %llu..%llu, transform at the end of the first encounter, joint MAP reference\n",
+              options.name.c_str(), static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
+              static_cast<unsigned long long>(first_seed + num_seeds - 1));       // NOLINT(runtime/int)
+  std::printf("%-12s %6s %22s %22s\n", "holder<-peer", "met", "error m median / p90", "error deg median / p90");
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    for (const bool forward : {true, false}) {
+      const std::string& a = options.robots[forward ? pairs[p].first : pairs[p].second].id;
+      const std::string& b = options.robots[forward ? pairs[p].second : pairs[p].first].id;
+      std::vector<double> m, deg;
+      for (const auto& r : results) {
+        const PairErrors& e = r[p];
+        if (std::isnan(e.ij_m)) continue;
+        m.push_back(forward ? e.ij_m : e.ji_m);
+        deg.push_back(forward ? e.ij_deg : e.ji_deg);
+      }
+      const std::string name = a + "<-" + b;
+      if (m.empty()) {
+        std::printf("%-12s %6d %22s %22s\n", name.c_str(), 0, "-", "-");
+        continue;
+      }
+      std::printf("%-12s %6zu %10.3f / %9.3f %10.2f / %9.2f\n", name.c_str(), m.size(), evaluator::Median(m),
+                  evaluator::Percentile(m, 90.0), evaluator::Median(deg), evaluator::Percentile(deg, 90.0));
+      json["pairs"][name] = {{"error_m", m}, {"error_deg", deg}};
+    }
+  }
+  WriteJson(json, json_path);
+  return 0;
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"Accuracy of each robot's own filter over seeds (in-process, no DDS)."};
+  std::string scenario_path, seeds_text = "1..50", json_path;
+  std::vector<std::string> overrides;
+  int particles = 0, threads = 1;
+  bool reference = false, transform_reference = false;
+  app.add_option("--scenario", scenario_path, "Scenario YAML file")->required();
+  app.add_option("--seeds", seeds_text, "Seed range A..B (inclusive)");
+  app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
+  app.add_option("--particles", particles, "Particles per filter (overrides filter.particles)")
+      ->check(CLI::Range(1, 1000000));
+  app.add_option("--threads", threads, "Seeds run in parallel")->check(CLI::Range(1, 256));
+  app.add_flag("--reference", reference,
+               "Run the approximately ideal reference instead of the filter: the batch MAP estimate of the "
+               "path so far at every step, with oracle association and landmark kinematics (static or "
+               "unicycle landmarks)");
+  app.add_flag("--transform-reference", transform_reference,
+               "Print instead the error of each pair's transform at the end of its first encounter as the "
+               "joint MAP reference of both robots holds it");
+  app.add_option("--json", json_path, "Write medians, 90th percentiles and per-seed values here");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  const auto [first_seed, last_seed] = ParseSeeds(seeds_text);
+  common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);
+  if (particles > 0) options.filter.particles = particles;
+  if (reference && transform_reference) throw std::runtime_error("--reference or --transform-reference, not both");
+  // The reference's oracle association: the same detections, with their identities.
+  if (reference || transform_reference) options.sensors.lidar.report_identity = true;
+  const int num_seeds = static_cast<int>(last_seed - first_seed + 1);
+
+  if (transform_reference) return PrintTransformReference(options, first_seed, num_seeds, threads, json_path);
+  std::vector<std::vector<RobotRun>> results(num_seeds);
+  ForEachSeed(num_seeds, threads, [&](int s) { results[s] = RunSeed(options, first_seed + s, reference); });
 
   nlohmann::json json;
   json["scenario"] = options.name;
@@ -241,11 +359,7 @@ int Main(int argc, char** argv) {
       json["robots"][id][kMetricNames[m]] = {{"median", median}, {"p90", p90}, {"values", values}};
     }
   }
-  if (!json_path.empty()) {
-    std::ofstream out(json_path);
-    if (!out) throw std::runtime_error("cannot write " + json_path);
-    out << json.dump(2) << "\n";
-  }
+  WriteJson(json, json_path);
   return 0;
 }
 
