@@ -240,6 +240,7 @@ void ForEachSeed(int num_seeds, int threads, const Fn& fn) {
     }
   };
   std::vector<std::thread> pool;
+  pool.reserve(std::min(threads, num_seeds));
   for (int t = 0; t < std::min(threads, num_seeds); ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
   std::fprintf(stderr, "\n");
@@ -284,7 +285,8 @@ int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_
         m.push_back(forward ? e.ij_m : e.ji_m);
         deg.push_back(forward ? e.ij_deg : e.ji_deg);
       }
-      const std::string name = a + "<-" + b;
+      std::string name = a;
+      name.append("<-").append(b);
       if (m.empty()) {
         std::printf("%-12s %6d %22s %22s\n", name.c_str(), 0, "-", "-");
         continue;
@@ -334,7 +336,8 @@ int Main(int argc, char** argv) {
 
   if (transform_reference) return PrintTransformReference(options, first_seed, num_seeds, threads, json_path);
   std::vector<std::vector<RobotRun>> results(num_seeds);
-  ForEachSeed(num_seeds, threads, [&](int s) { results[s] = RunSeed(options, first_seed + s, reference); });
+  const std::uint64_t first = first_seed;  // a structured binding is not captured before C++20
+  ForEachSeed(num_seeds, threads, [&](int s) { results[s] = RunSeed(options, first + s, reference); });
 
   nlohmann::json json;
   json["scenario"] = options.name;
@@ -353,6 +356,7 @@ int Main(int argc, char** argv) {
     const std::string& id = options.robots[i].id;
     for (int m = 0; m < 4; ++m) {
       std::vector<double> values;
+      values.reserve(results.size());
       for (const auto& r : results) values.push_back(Metric(r[i], m));
       const double median = evaluator::Median(values), p90 = evaluator::Percentile(values, 90.0);
       std::printf("%-6s %-24s %10.3f %10.3f\n", id.c_str(), kMetricNames[m], median, p90);
