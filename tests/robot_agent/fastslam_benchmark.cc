@@ -1,6 +1,6 @@
 // Speed of the FastSLAM core (Google Benchmark; not a ctest test):
 //  - BM_LandmarkUpdates/N/M: N particles x M landmarks, every landmark of every particle updated
-//    once with a range-bearing measurement through UpdateBatch (gather, SSE2 kernel, scatter),
+//    once with a range-bearing measurement through UpdateBatch (load, vectorized kernel, store),
 //    the path the filter takes; items_per_second = particle-landmark 2-D EKF updates per second.
 //  - BM_FullStep<D>: FastSlam::Process with 1000 particles, 50 landmarks in the map and about 10
 //    detections per step (landmarks on a ring of radius 10 m, the robot driving along it with a

@@ -156,7 +156,8 @@ TEST(MeasurementJacobian, MatchesNumericDifferences) {
   }
 }
 
-// The batch update (gather, SSE2 kernel, scatter) equals the textbook EKF update in Eigen:
+// The batch update (lanes loaded from their blocks, updated, stored back) equals the textbook
+// EKF update in Eigen:
 //   S = H P H^T + R, K = P H^T S^-1, x += K nu, P = (I - K H) P.
 template <int D>
 void CheckUpdate() {
