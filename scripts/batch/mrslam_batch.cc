@@ -164,15 +164,28 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
   return out;
 }
 
-// The transform errors of one pair (i, j) in one seed, as the joint reference holds
-// T(G_i <- G_j) and T(G_j <- G_i) at the end of their first encounter (the detector's rule:
-// both detections within rendezvous.window_steps, from rendezvous.enable_from_step on; the end:
-// the last step of the run of consecutive steps with mutual detections, at most 10 steps).
-// NaN if they never meet. The reference counts their detections of each other from
-// enable_from_step on, and starts robot j's first pose from the truth displaced by (0.3 m,
-// 0.3 m, 5 deg): a result near that displacement would say the data do not place it.
+// The error of a held transform against the true one (translation in the holder's frame).
+struct TransformError {
+  double m = std::nan(""), deg = std::nan("");
+};
+TransformError ErrorOf(const common::Pose2& held, const common::Pose2& truth) {
+  return {(held.Translation() - truth.Translation()).norm(),
+          common::DegFromRad(std::abs(common::WrapAngle(held.heading - truth.heading)))};
+}
+
+// The transform errors of one pair (i, j) in one seed at the end of their first encounter (the
+// detector's rule: both detections within rendezvous.window_steps, from
+// rendezvous.enable_from_step on; the end: the last step of the run of consecutive steps with
+// mutual detections, at most 10 steps), for T(G_i <- G_j) and T(G_j <- G_i):
+//  - joint: as the joint MAP reference of both robots holds it. It counts their detections of
+//    each other from enable_from_step on, and starts robot j's first pose from the truth
+//    displaced by (0.3 m, 0.3 m, 5 deg): a result near that displacement would say the data do
+//    not place it;
+//  - own: each robot's own MAP reference estimate composed with the exact relative pose of the
+//    two robots at that step (a perfect mutual measurement).
+// NaN if they never meet.
 struct PairErrors {
-  double ij_m = std::nan(""), ij_deg = std::nan(""), ji_m = std::nan(""), ji_deg = std::nan("");
+  TransformError joint_ij, joint_ji, own_ij, own_ji;
 };
 PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed, int i, int j) {
   options.seed = seed;
@@ -182,7 +195,8 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
   // T(G_i <- G_j) maps j's first pose in G_j to its first pose in G_i.
   const common::Pose2 start_j = robot_agent::InitialPoseInOwnFrame(options.robots[j]);
   const common::Pose2 guess = common::Compose(common::Compose(true_ij, start_j), {0.3, 0.3, common::kPi / 36});
-  batch::MapReference reference(options, {i, j}, {guess}, options.rendezvous.enable_from_step);
+  batch::MapReference joint(options, {i, j}, {guess}, options.rendezvous.enable_from_step);
+  batch::MapReference own_i(options, i), own_j(options, j);
   const std::string& id_i = options.robots[i].id;
   const std::string& id_j = options.robots[j].id;
   auto sees = [](const common::SensorStep& step, const std::string& id) {
@@ -190,11 +204,13 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
                        [&](const common::RobotDetection& d) { return d.seen_robot_id == id; });
   };
   int last_ij = -1000000, last_ji = -1000000, fired = -1;
-  common::Pose2 held;
+  common::Pose2 held_joint, held_own;
   PairErrors out;
   for (int k = 1; k <= options.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();
-    reference.Process({steps[i], steps[j]});
+    joint.Process({steps[i], steps[j]});
+    own_i.Process(steps[i]);
+    own_j.Process(steps[j]);
     const bool ij = sees(steps[i], id_j), ji = sees(steps[j], id_i);
     if (ij) last_ij = k;
     if (ji) last_ji = k;
@@ -202,13 +218,16 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
     if (fired < 0 && k >= options.rendezvous.enable_from_step && last_ij > k - w && last_ji > k - w) fired = k;
     if (fired < 0) continue;
     const bool in_run = k == fired || (ij && ji && k - fired < 10);
-    if (in_run) held = common::Compose(reference.FirstPose(1), common::Inverse(start_j));
+    if (in_run) {
+      const common::GroundTruth truth = source->Truth();
+      const common::Pose2 relative = common::Between(truth.robots[i].pose, truth.robots[j].pose);
+      held_joint = common::Compose(joint.FirstPose(1), common::Inverse(start_j));
+      held_own = common::Compose(common::Compose(own_i.Pose(), relative), common::Inverse(own_j.Pose()));
+    }
     if (!in_run || k == options.run.steps) {
-      const common::Pose2 held_ji = common::Inverse(held), true_ji = common::Inverse(true_ij);
-      out.ij_m = (held.Translation() - true_ij.Translation()).norm();
-      out.ij_deg = common::DegFromRad(std::abs(common::WrapAngle(held.heading - true_ij.heading)));
-      out.ji_m = (held_ji.Translation() - true_ji.Translation()).norm();
-      out.ji_deg = common::DegFromRad(std::abs(common::WrapAngle(held_ji.heading - true_ji.heading)));
+      const common::Pose2 true_ji = common::Inverse(true_ij);
+      out = {ErrorOf(held_joint, true_ij), ErrorOf(common::Inverse(held_joint), true_ji), ErrorOf(held_own, true_ij),
+             ErrorOf(common::Inverse(held_own), true_ji)};
       break;
     }
   }
@@ -273,27 +292,37 @@ int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_
   std::printf("scenario %s, seeds %llu..%llu, transform at the end of the first encounter, joint MAP reference\n",
               options.name.c_str(), static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
               static_cast<unsigned long long>(first_seed + num_seeds - 1));       // NOLINT(runtime/int)
-  std::printf("%-12s %6s %22s %22s\n", "holder<-peer", "met", "error m median / p90", "error deg median / p90");
+  std::printf("%-12s %5s  %-31s  %s\n", "holder<-peer", "met", "joint reference: m / deg (p90)",
+              "own references + exact mutual: m / deg (p90)");
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     for (const bool forward : {true, false}) {
       const std::string& a = options.robots[forward ? pairs[p].first : pairs[p].second].id;
       const std::string& b = options.robots[forward ? pairs[p].second : pairs[p].first].id;
-      std::vector<double> m, deg;
+      std::vector<double> joint_m, joint_deg, own_m, own_deg;
       for (const auto& r : results) {
-        const PairErrors& e = r[p];
-        if (std::isnan(e.ij_m)) continue;
-        m.push_back(forward ? e.ij_m : e.ji_m);
-        deg.push_back(forward ? e.ij_deg : e.ji_deg);
+        const TransformError& joint = forward ? r[p].joint_ij : r[p].joint_ji;
+        const TransformError& own = forward ? r[p].own_ij : r[p].own_ji;
+        if (std::isnan(joint.m)) continue;
+        joint_m.push_back(joint.m);
+        joint_deg.push_back(joint.deg);
+        own_m.push_back(own.m);
+        own_deg.push_back(own.deg);
       }
       std::string name = a;
       name.append("<-").append(b);
-      if (m.empty()) {
-        std::printf("%-12s %6d %22s %22s\n", name.c_str(), 0, "-", "-");
+      if (joint_m.empty()) {
+        std::printf("%-12s %5d\n", name.c_str(), 0);
         continue;
       }
-      std::printf("%-12s %6zu %10.3f / %9.3f %10.2f / %9.2f\n", name.c_str(), m.size(), evaluator::Median(m),
-                  evaluator::Percentile(m, 90.0), evaluator::Median(deg), evaluator::Percentile(deg, 90.0));
-      json["pairs"][name] = {{"error_m", m}, {"error_deg", deg}};
+      std::printf("%-12s %5zu  %5.3f / %4.2f (%5.3f / %5.2f)  %5.3f / %4.2f (%5.3f / %5.2f)\n", name.c_str(),
+                  joint_m.size(), evaluator::Median(joint_m), evaluator::Median(joint_deg),
+                  evaluator::Percentile(joint_m, 90.0), evaluator::Percentile(joint_deg, 90.0),
+                  evaluator::Median(own_m), evaluator::Median(own_deg), evaluator::Percentile(own_m, 90.0),
+                  evaluator::Percentile(own_deg, 90.0));
+      json["pairs"][name] = {{"joint_error_m", joint_m},
+                             {"joint_error_deg", joint_deg},
+                             {"own_error_m", own_m},
+                             {"own_error_deg", own_deg}};
     }
   }
   WriteJson(json, json_path);
