@@ -101,15 +101,22 @@ class Estimator {
       reference_->Process(step);
     }
   }
-  common::Pose2 Pose() const { return filter_ ? filter_->Estimate().pose : reference_->Pose(); }
-  std::vector<evaluator::MapPoint> Map() const {
+  // The current pose and map (landmark positions with their identities).
+  struct Output {
+    common::Pose2 pose;
     std::vector<evaluator::MapPoint> map;
+  };
+  Output Estimate() const {
+    Output out;
     if (filter_) {
-      for (const auto& l : filter_->Estimate().landmarks) map.push_back({l.mean.head<2>(), l.landmark_id});
+      const robot_agent::FilterEstimate e = filter_->Estimate();
+      out.pose = e.pose;
+      for (const auto& l : e.landmarks) out.map.push_back({l.mean.head<2>(), l.landmark_id});
     } else {
-      for (const auto& [position, id] : reference_->Landmarks()) map.push_back({position, id});
+      out.pose = reference_->Pose();
+      for (const auto& [position, id] : reference_->Landmarks()) out.map.push_back({position, id});
     }
-    return map;
+    return out;
   }
 
  private:
@@ -142,10 +149,10 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
       const common::Pose2& frame = frames[i].second;
       const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
       estimators[i].Process(steps[i]);
-      const common::Pose2 pose = estimators[i].Pose();
-      position[i].push_back(evaluator::PositionError(pose, truth_own));
-      heading[i].push_back(common::DegFromRad(evaluator::HeadingError(pose, truth_own)));
-      for (const double err : evaluator::LandmarkErrors(estimators[i].Map(), true_landmarks, frame)) {
+      const Estimator::Output e = estimators[i].Estimate();
+      position[i].push_back(evaluator::PositionError(e.pose, truth_own));
+      heading[i].push_back(common::DegFromRad(evaluator::HeadingError(e.pose, truth_own)));
+      for (const double err : evaluator::LandmarkErrors(e.map, true_landmarks, frame)) {
         landmark[i].push_back(err);
       }
       for (const auto& s : steps[i].odometry.segments) {
