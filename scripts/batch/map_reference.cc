@@ -9,6 +9,7 @@
 #include <Eigen/SparseCore>
 
 #include "common/angles.h"
+#include "robot_agent/core/landmark_ekf.h"
 #include "robot_agent/core/slam_filter.h"
 
 namespace mrslam::batch {
@@ -218,13 +219,12 @@ void MapReference::Solve() {
         p = robots_[z.seen].path[z.step].Translation();
         target_col = robot_col(z.seen, z.step);
       }
-      const double dx = p.x() - x.x, dy = p.y() - x.y, q = dx * dx + dy * dy, range = std::sqrt(q);
-      const Eigen::Vector2d res(z_w(0) * (z.range_m - range),
-                                z_w(1) * WrapAngle(z.bearing_rad - (std::atan2(dy, dx) - x.heading)));
+      const common::RangeBearing h = common::MeasureRangeBearing(x, p);
+      const Eigen::Vector2d res(z_w(0) * (z.range_m - h.range_m), z_w(1) * WrapAngle(z.bearing_rad - h.bearing_rad));
       // Jacobians of the residual (z - h): -dh.
-      Eigen::MatrixXd jx(2, 3), jp(2, 3);
-      jx << dx / range, dy / range, 0.0, -dy / q, dx / q, 1.0;
-      jp << -dx / range, -dy / range, 0.0, dy / q, -dx / q, 0.0;
+      const Eigen::MatrixXd jx = -robot_agent::MeasurementJacobianPose(p, x);
+      Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, 3);
+      jp.leftCols<2>() = -robot_agent::MeasurementJacobianLandmark(p, x);
       rows->Add(res, {{robot_col(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
     }
   };
