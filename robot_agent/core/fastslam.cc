@@ -90,7 +90,8 @@ FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string&
       max_position_var_(options.filter.max_landmark_position_sd_m * options.filter.max_landmark_position_sd_m),
       batch_(var_r_, var_b_),
       rng_(seed, robot_id + "/fastslam"),
-      last_ess_(options.filter.particles) {
+      last_ess_(options.filter.particles),
+      calibration_(options.filter) {
   // Landmark process noise per step: none for static landmarks; (x, y, heading) from the
   // scenario, and for constant turn rate the speed and turn-rate random walks.
   for (int i = 0; i < D; ++i) q_[i] = 0.0;
@@ -148,41 +149,7 @@ void FastSlam<D>::MotionFromStep(const common::SensorStep& step, std::vector<Seg
     (*variance)(2) += imu_.gyro_noise_sd_radps * imu_.gyro_noise_sd_radps * dt * dt / n;
     return;
   }
-  // Calibration of the commands (filter.odometry_scale, odometry_turn_scale, odometry_lag_s):
-  // the robot moves at odometry_scale times the commanded forward speed and odometry_turn_scale
-  // times the commanded turn rate, odometry_lag_s after the command.
-  const double scale = filter_.odometry_scale;
-  const double turn_scale = filter_.odometry_turn_scale;
-  const double lag = filter_.odometry_lag_s;
-  for (const auto& s : step.odometry.segments) {
-    if (std::isfinite(s.v_mps) && std::isfinite(s.w_radps) && std::isfinite(s.time_s) && s.dt_s > 0.0) {
-      if (lag > 0.0) {
-        odometry_history_.push_back({s.time_s, s.dt_s, scale * s.v_mps, turn_scale * s.w_radps});
-      } else {
-        segments->push_back({scale * s.v_mps, turn_scale * s.w_radps, s.dt_s});
-      }
-    }
-  }
-  if (lag > 0.0) {
-    // The step covers [time_s - dt, time_s); its motion is the commands of [from, to) =
-    // [time_s - dt - lag, time_s - lag), zero velocity where none was issued.
-    const double to = time_s_ - lag;
-    const double from = to - step_dt_s_;
-    double cursor = from;
-    for (const auto& h : odometry_history_) {
-      const double start = std::max(h.time_s, cursor);
-      const double end = std::min(h.time_s + h.dt_s, to);
-      if (end <= start) continue;
-      if (start > cursor) segments->push_back({0.0, 0.0, start - cursor});
-      segments->push_back({h.v_mps, h.w_radps, end - start});
-      cursor = end;
-    }
-    if (to > cursor) segments->push_back({0.0, 0.0, to - cursor});
-    while (!odometry_history_.empty() && odometry_history_.front().time_s + odometry_history_.front().dt_s <= to) {
-      odometry_history_.pop_front();
-    }
-  }
-  if (segments->empty()) segments->push_back({0.0, 0.0, step_dt_s_});
+  *segments = calibration_.Step(step.odometry, time_s_, step_dt_s_);
 }
 
 template <int D>

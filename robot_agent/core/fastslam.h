@@ -1,7 +1,6 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +12,7 @@
 #include "common/sensor_types.h"
 #include "robot_agent/core/association.h"
 #include "robot_agent/core/landmark_ekf.h"
+#include "robot_agent/core/odometry_calibration.h"
 #include "robot_agent/core/slam_filter.h"
 
 namespace mrslam::robot_agent {
@@ -111,9 +111,7 @@ class FastSlam : public SlamFilter {
     int index = 0;  // position in the sorted scan
   };
   // A piece of the step's motion (from the IMU, v_mps is unused: each particle has its speed).
-  struct Segment {
-    double v_mps, w_radps, dt_s;
-  };
+  using Segment = OdometryCalibration::Motion;
   struct Match {
     int slot;
     int detection;
@@ -169,11 +167,10 @@ class FastSlam : public SlamFilter {
   Eigen::Matrix3d pose_covariance_;
   std::uint32_t step_ = 0;
   double time_s_ = 0.0;
-  bool imu_step_ = false;          // this step's motion comes from the IMU
-  double imu_speed_change_ = 0.0;  // IMU: the step's change of speed, mean(accel_x) dt
-  double imu_speed_var_ = 0.0;     // and its variance, sd_a^2 dt^2 / n
-  // filter.odometry_lag_s > 0: recent odometry segments (scaled), to replay them lag_s later.
-  std::deque<common::OdometrySegment> odometry_history_;
+  bool imu_step_ = false;            // this step's motion comes from the IMU
+  double imu_speed_change_ = 0.0;    // IMU: the step's change of speed, mean(accel_x) dt
+  double imu_speed_var_ = 0.0;       // and its variance, sd_a^2 dt^2 / n
+  OdometryCalibration calibration_;  // of the wheel odometry (scale, lag)
   std::uint32_t next_track_id_ = 1;
   std::vector<std::uint32_t> creation_ids_;  // per detection of this step, 0 until used
 

@@ -9,6 +9,7 @@
 #include <Eigen/SparseCore>
 
 #include "common/angles.h"
+#include "common/gaussian.h"
 #include "robot_agent/core/landmark_ekf.h"
 #include "robot_agent/core/slam_filter.h"
 
@@ -22,7 +23,8 @@ using common::WrapAngle;
 double Sd(double var) { return std::sqrt(std::max(var, 1e-12)); }
 
 // Appends the rows of one whitened residual block: r (size n) and its Jacobian blocks
-// (n x 3 each) for the variables at the given column offsets (-1: a known quantity, no column).
+// (n x 3 each, zeros kept: the pattern depends on the structure only) for the variables at the
+// given column offsets (-1: a known quantity, no column).
 struct Rows {
   std::vector<Eigen::Triplet<double>> jacobian;
   std::vector<double> residual;
@@ -34,7 +36,7 @@ struct Rows {
       if (col < 0) continue;
       for (int i = 0; i < j.rows(); ++i) {
         for (int c = 0; c < j.cols(); ++c) {
-          if (j(i, c) != 0.0) jacobian.emplace_back(row + i, col + c, j(i, c));
+          jacobian.emplace_back(row + i, col + c, j(i, c));
         }
       }
     }
@@ -46,20 +48,6 @@ Eigen::Vector3d Minus(const Pose2& a, const Pose2& b) {
   return {a.x - b.x, a.y - b.y, WrapAngle(a.heading - b.heading)};
 }
 
-// Jacobian of g at x by central differences (g: Pose2 -> Pose2, differences as Minus).
-template <typename G>
-Eigen::Matrix3d NumericJacobian(const G& g, const Pose2& x) {
-  Eigen::Matrix3d j;
-  constexpr double kH = 1e-6;
-  for (int c = 0; c < 3; ++c) {
-    Eigen::Vector3d d = Eigen::Vector3d::Zero();
-    d(c) = kH;
-    const Pose2 plus = g(Pose2::FromVector(x.Vector() + d)), minus = g(Pose2::FromVector(x.Vector() - d));
-    j.col(c) = Minus(plus, minus) / (2.0 * kH);
-  }
-  return j;
-}
-
 }  // namespace
 
 MapReference::MapReference(const common::ScenarioOptions& options, int robot_index)
@@ -68,6 +56,8 @@ MapReference::MapReference(const common::ScenarioOptions& options, int robot_ind
 MapReference::MapReference(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
                            const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step)
     : dt_s_(options.run.dt_s),
+      filter_(options.filter),
+      replay_(options.replay.enabled),
       robot_var_(options.noise.robot_process_var),
       landmark_var_(options.noise.landmark_process_var),
       var_r_(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
@@ -91,29 +81,32 @@ MapReference::MapReference(const common::ScenarioOptions& options, const std::ve
   }
   for (std::size_t r = 0; r < robot_indices.size(); ++r) {
     const common::RobotOptions& robot = options.robots.at(robot_indices[r]);
-    robots_.push_back({robot.id, {r == 0 ? robot_agent::InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]}, {}});
+    robots_.push_back({robot.id,
+                       {r == 0 ? robot_agent::InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]},
+                       robot_agent::OdometryCalibration(options.filter),
+                       {}});
   }
-}
-
-Pose2 MapReference::StepRobot(const Robot& robot, const Pose2& x, int t) const {
-  Pose2 out = x;
-  for (const auto& s : robot.odometry[t - 1]) out = common::UnicycleStep(out, s.v_mps, s.w_radps, s.dt_s);
-  return out;
 }
 
 Pose2 MapReference::StepLandmark(const Pose2& l, const Kinematics& k) const {
   return k.is_static ? l : common::UnicycleStep(l, k.v_mps, k.w_radps, dt_s_);
 }
 
-void MapReference::Process(const std::vector<common::SensorStep>& steps) {
+void MapReference::Add(const std::vector<common::SensorStep>& steps) {
   if (steps.size() != robots_.size()) throw std::invalid_argument("the reference needs one step per robot");
   const int t = static_cast<int>(robots_.front().path.size());
   for (std::size_t r = 0; r < robots_.size(); ++r) {
     Robot& robot = robots_[r];
-    robot.odometry.push_back(steps[r].odometry.segments);
-    robot.path.push_back(StepRobot(robot, robot.path.back(), t));
+    Pose2 increment;
+    for (const auto& m : robot.calibration.Step(steps[r].odometry, steps[r].lidar.stamp.time_s, dt_s_)) {
+      increment = common::UnicycleStep(increment, m.v_mps, m.w_radps, m.dt_s);
+    }
+    robot.increment.push_back(increment);
+    robot.path.push_back(common::Compose(robot.path.back(), increment));
   }
-  for (auto& [id, chain] : chains_) chain.states.push_back(StepLandmark(chain.states.back(), chain.kinematics));
+  for (auto& [id, chain] : chains_) {
+    if (!chain.kinematics.is_static) chain.states.push_back(StepLandmark(chain.states.back(), chain.kinematics));
+  }
   for (std::size_t r = 0; r < robots_.size(); ++r) {
     for (const auto& d : steps[r].lidar.landmarks) AddLandmarkReading(static_cast<int>(r), t, d);
     if (t < robot_detections_from_step_) continue;
@@ -126,20 +119,20 @@ void MapReference::Process(const std::vector<common::SensorStep>& steps) {
       }
     }
   }
-  Solve();
 }
 
 void MapReference::AddLandmarkReading(int r, int t, const common::LandmarkDetection& d) {
   if (d.landmark_id < 0) throw std::invalid_argument("the reference needs detections with identities");
-  const auto known = kinematics_.find(d.landmark_id);
-  if (known == kinematics_.end() || !std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad)) return;
+  const auto listed = kinematics_.find(d.landmark_id);
+  const bool known = listed != kinematics_.end() || replay_;
+  if (!known || !std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad)) return;
   readings_.push_back({t, r, d.landmark_id, -1, d.range_m, d.bearing_rad});
   const Eigen::Vector2d point = common::PointFromRangeBearing(robots_[r].path.back(), {d.range_m, d.bearing_rad});
   auto [it, created] = chains_.try_emplace(d.landmark_id);
   Chain& chain = it->second;
   if (created) {
     chain.first_step = t;
-    chain.kinematics = known->second;
+    if (listed != kinematics_.end()) chain.kinematics = listed->second;
     chain.states.push_back({point.x(), point.y(), 0.0});
   } else if (chain.sightings == 1 && !chain.kinematics.is_static && t > chain.first_step) {
     // Second sighting: the heading from the displacement since the first (the chord of the arc
@@ -157,6 +150,35 @@ void MapReference::AddLandmarkReading(int r, int t, const common::LandmarkDetect
 }
 
 void MapReference::Solve() {
+  SolveOnce();
+  for (int round = 0; round < 10 && UpdateInliers(); ++round) SolveOnce();
+}
+
+// The index of a landmark's state at step t.
+int MapReference::StateIndex(const Chain& chain, int t) {
+  return chain.kinematics.is_static ? 0 : t - chain.first_step;
+}
+
+bool MapReference::UpdateInliers() {
+  if (filter_.outlier_gate_probability >= 1.0) return false;
+  const double gate = common::ChiSquare2Quantile(filter_.outlier_gate_probability);
+  bool changed = false;
+  for (Reading& z : readings_) {
+    const Eigen::Vector2d p =
+        z.landmark_id >= 0
+            ? chains_.at(z.landmark_id).states[StateIndex(chains_.at(z.landmark_id), z.step)].Translation()
+            : robots_[z.seen].path[z.step].Translation();
+    const common::RangeBearing h = common::MeasureRangeBearing(robots_[z.robot].path[z.step], p);
+    const double d2 = (z.range_m - h.range_m) * (z.range_m - h.range_m) / std::max(var_r_, 1e-12) +
+                      std::pow(WrapAngle(z.bearing_rad - h.bearing_rad), 2) / std::max(var_b_, 1e-12);
+    const bool inlier = d2 <= gate;
+    changed = changed || inlier != z.inlier;
+    z.inlier = inlier;
+  }
+  return changed;
+}
+
+void MapReference::SolveOnce() {
   // Columns: every robot's poses (the first robot's from step 1, the others' from their first
   // pose), then every chain's states in id order.
   const int steps = static_cast<int>(robots_.front().path.size()) - 1;
@@ -184,9 +206,10 @@ void MapReference::Solve() {
       const Robot& robot = robots_[r];
       const int ri = static_cast<int>(r);
       for (int t = 1; t <= steps; ++t) {
-        const auto f = [&](const Pose2& x) { return StepRobot(robot, x, t); };
-        const Eigen::Vector3d res = robot_w.asDiagonal() * Minus(robot.path[t], f(robot.path[t - 1]));
-        const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * NumericJacobian(f, robot.path[t - 1]));
+        const Pose2& increment = robot.increment[t - 1];
+        const Pose2& previous = robot.path[t - 1];
+        const Eigen::Vector3d res = robot_w.asDiagonal() * Minus(robot.path[t], common::Compose(previous, increment));
+        const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
         rows->Add(res, {{robot_col(ri, t), Eigen::MatrixXd(robot_w.asDiagonal())}, {robot_col(ri, t - 1), jf}});
       }
     }
@@ -196,25 +219,26 @@ void MapReference::Solve() {
       Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(1, 3);
       prior(0, 2) = 1e-3;
       rows->Add(Eigen::VectorXd::Zero(1), {{base, prior}});
-      const Kinematics& k = chain.kinematics;
-      const auto f = [&](const Pose2& l) { return StepLandmark(l, k); };
-      // A static landmark stays put: a stiff constraint between its steps' states.
-      const Eigen::Vector3d w = k.is_static ? Eigen::Vector3d::Constant(1e4) : landmark_w;
+      // A unicycle step is a composition with a fixed increment (a static landmark has one state).
+      const Pose2 increment = StepLandmark(Pose2{}, chain.kinematics);
+      const Eigen::Vector3d& w = landmark_w;
       for (std::size_t i = 1; i < chain.states.size(); ++i) {
-        const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], f(chain.states[i - 1]));
-        const Eigen::Matrix3d jf = -(w.asDiagonal() * NumericJacobian(f, chain.states[i - 1]));
+        const Pose2& previous = chain.states[i - 1];
+        const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], common::Compose(previous, increment));
+        const Eigen::Matrix3d jf = -(w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
         const int col = base + 3 * static_cast<int>(i);
         rows->Add(res, {{col, Eigen::MatrixXd(w.asDiagonal())}, {col - 3, jf}});
       }
     }
     for (const Reading& z : readings_) {
+      if (!z.inlier) continue;
       const Pose2& x = robots_[z.robot].path[z.step];
       Eigen::Vector2d p;
       int target_col = 0;
       if (z.landmark_id >= 0) {
         const Chain& chain = chains_.at(z.landmark_id);
-        p = chain.states[z.step - chain.first_step].Translation();
-        target_col = chain_col[z.landmark_id] + 3 * (z.step - chain.first_step);
+        p = chain.states[StateIndex(chain, z.step)].Translation();
+        target_col = chain_col[z.landmark_id] + 3 * StateIndex(chain, z.step);
       } else {
         p = robots_[z.seen].path[z.step].Translation();
         target_col = robot_col(z.seen, z.step);
@@ -248,6 +272,9 @@ void MapReference::Solve() {
     }
   };
   double lambda = 1e-6;
+  // The pattern of H is the same at every iteration (Rows keeps structural zeros): its ordering
+  // and symbolic factorization are computed once.
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   for (int iteration = 0; iteration < 30; ++iteration) {
     Rows rows;
     build(&rows);
@@ -259,7 +286,8 @@ void MapReference::Solve() {
     const Eigen::VectorXd g = j.transpose() * r;
     Eigen::VectorXd diag = h.diagonal();
     for (int c = 0; c < cols; ++c) h.coeffRef(c, c) += lambda * std::max(diag(c), 1e-9);
-    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(h);
+    if (iteration == 0) solver.analyzePattern(h);
+    solver.factorize(h);
     // The residual is z - h(.) style (r = target - model), so the step solves H d = -J^T r.
     const Eigen::VectorXd delta = solver.solve(-g);
     if (solver.info() != Eigen::Success || !delta.allFinite()) break;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <map>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -8,6 +9,7 @@
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
 #include "common/sensor_types.h"
+#include "robot_agent/core/odometry_calibration.h"
 
 namespace mrslam::batch {
 
@@ -25,7 +27,13 @@ namespace mrslam::batch {
 // them is only what the data say (common landmarks, detections of each other). Solved by
 // Gauss-Newton with Levenberg damping on the sparse normal equations, warm-started from the
 // previous step's solution. A landmark's heading is started at its second sighting from the
-// displacement between the two sightings. Pure; not thread-safe.
+// displacement between the two sightings. The odometry is calibrated as the filters calibrate it
+// (filter.odometry_scale, odometry_turn_scale, odometry_lag_s; OdometryCalibration); a replayed
+// data set's landmarks are static. With filter.outlier_gate_probability < 1, a reading whose
+// whitened residual at the solution lies beyond that chi-square (2 dof) gate is left out and the
+// problem solved again until the set of such readings stays the same (at most 10 rounds), as
+// the filters ignore such readings. Add and Solve apart turn it into a smoother of a whole run
+// (Path: every pose). Pure; not thread-safe.
 class MapReference {
  public:
   // One robot, in its own frame. Throws std::invalid_argument for landmark models other than
@@ -38,12 +46,22 @@ class MapReference {
   MapReference(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
                const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step);
 
-  // One sensor step per robot of the set, in the set's order.
-  void Process(const std::vector<common::SensorStep>& steps);
+  // One sensor step per robot of the set, in the set's order, then Solve.
+  void Process(const std::vector<common::SensorStep>& steps) {
+    Add(steps);
+    Solve();
+  }
   void Process(const common::SensorStep& step) { Process(std::vector<common::SensorStep>{step}); }
+  // One sensor step per robot without solving: the new poses follow the odometry from the last
+  // ones, a new landmark is placed from its first reading.
+  void Add(const std::vector<common::SensorStep>& steps);
+  // The MAP estimate of everything added so far (warm-started from the current one).
+  void Solve();
   // Robot r of the set (0: the first): its current pose and its first pose, in the frame.
   const common::Pose2& Pose(int r = 0) const { return robots_.at(r).path.back(); }
   const common::Pose2& FirstPose(int r) const { return robots_.at(r).path.front(); }
+  // Robot r's every pose, from its first (step 0) to the last step added.
+  const std::vector<common::Pose2>& Path(int r) const { return robots_.at(r).path; }
   // The current position of every landmark seen so far, with its identity.
   std::vector<std::pair<Eigen::Vector2d, int>> Landmarks() const;
 
@@ -52,7 +70,7 @@ class MapReference {
     bool is_static = true;
     double v_mps = 0.0, w_radps = 0.0;
   };
-  struct Chain {  // one landmark's states from its first sighting on
+  struct Chain {  // one landmark's states from its first sighting on (static: one state)
     int first_step = 0;
     Kinematics kinematics;
     std::vector<common::Pose2> states;
@@ -60,22 +78,31 @@ class MapReference {
   };
   struct Robot {
     std::string id;
-    std::vector<common::Pose2> path;                             // path[0]: the first pose
-    std::vector<std::vector<common::OdometrySegment>> odometry;  // odometry[t - 1]: step t's commands
+    std::vector<common::Pose2> path;  // path[0]: the first pose
+    robot_agent::OdometryCalibration calibration;
+    // increment[t - 1]: step t's motion in the robot's frame, x_t = Compose(x_{t-1}, increment)
+    // (a unicycle step is one), the calibrated odometry's segments composed.
+    std::vector<common::Pose2> increment;
   };
   struct Reading {
     int step, robot;  // who read it, when
     int landmark_id;  // a landmark, or -1: robot `seen` of the set
     int seen;
     double range_m, bearing_rad;
+    bool inlier = true;  // within the outlier gate at the last solution
   };
 
-  common::Pose2 StepRobot(const Robot& robot, const common::Pose2& x, int t) const;  // f(x_{t-1}, u_t)
   common::Pose2 StepLandmark(const common::Pose2& l, const Kinematics& k) const;
   void AddLandmarkReading(int r, int t, const common::LandmarkDetection& d);
-  void Solve();
+  static int StateIndex(const Chain& chain, int t);  // of a landmark's state at step t
+  // Gauss-Newton with Levenberg damping over the inlying readings.
+  void SolveOnce();
+  // Marks the readings within the outlier gate at the current solution; true if any changed.
+  bool UpdateInliers();
 
   double dt_s_;
+  common::FilterOptions filter_;  // the odometry calibration and the outlier gate
+  bool replay_;                   // a data set's landmarks (all static)
   Eigen::Vector3d robot_var_, landmark_var_;
   double var_r_, var_b_;
   int robot_detections_from_step_;

@@ -1,5 +1,6 @@
 #include "scripts/batch/map_reference.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -111,6 +112,44 @@ TEST(MapReference, PlacesASecondRobotFromTheDataNotFromItsGuess) {
   for (int k = 0; k < 20; ++k) reference.Process(source->Step());
   EXPECT_LT((reference.FirstPose(1).Translation() - truth.Translation()).norm(), 1e-3);
   EXPECT_LT(std::abs(common::WrapAngle(reference.FirstPose(1).heading - truth.heading)), 1e-3);
+}
+
+// r1's whole path as a smoother solved every 15 steps holds it, from the given steps.
+std::vector<common::Pose2> SmoothedPath(const common::ScenarioOptions& o,
+                                        const std::vector<common::SensorStep>& steps) {
+  MapReference reference(o, 0);
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    reference.Add({steps[k]});
+    if ((k + 1) % 15 == 0 || k + 1 == steps.size()) reference.Solve();
+  }
+  return reference.Path(0);
+}
+
+double LargestDifference(const std::vector<common::Pose2>& a, const std::vector<common::Pose2>& b) {
+  double out = 0.0;
+  for (std::size_t t = 0; t < a.size(); ++t) out = std::max(out, (a[t].Translation() - b[t].Translation()).norm());
+  return out;
+}
+
+TEST(MapReference, LeavesOutAReadingBeyondTheOutlierGate) {
+  common::ScenarioOptions o = PaperScenario();
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
+  std::vector<common::SensorStep> clean;
+  for (int k = 0; k < o.run.steps; ++k) clean.push_back(source->Step().at(0));
+  std::vector<common::SensorStep> corrupted = clean, without = clean;
+  std::size_t k = 50;
+  while (corrupted.at(k).lidar.landmarks.empty()) ++k;
+  corrupted[k].lidar.landmarks[0].range_m += 3.0;  // ~100 sd off
+  without[k].lidar.landmarks.erase(without[k].lidar.landmarks.begin());
+
+  // No gate: the corrupted reading moves the path.
+  EXPECT_GT(LargestDifference(SmoothedPath(o, clean), SmoothedPath(o, corrupted)), 0.01);
+  // With the filters' gate, it is left out: the solution is that of the data without it (which
+  // differs from the clean data's by the genuine reading's information).
+  o.filter.outlier_gate_probability = 0.9999;
+  const std::vector<common::Pose2> gated = SmoothedPath(o, corrupted);
+  EXPECT_LT(LargestDifference(SmoothedPath(o, without), gated), 1e-6);
+  EXPECT_GT(LargestDifference(SmoothedPath(o, clean), gated), 1e-3);
 }
 
 TEST(MapReference, RejectsWhatItCannotModel) {
