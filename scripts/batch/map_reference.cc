@@ -97,12 +97,8 @@ void MapReference::Add(const std::vector<common::SensorStep>& steps) {
   const int t = static_cast<int>(robots_.front().path.size());
   for (std::size_t r = 0; r < robots_.size(); ++r) {
     Robot& robot = robots_[r];
-    Pose2 increment;
-    for (const auto& m : robot.calibration.Step(steps[r].odometry, steps[r].lidar.stamp.time_s, dt_s_)) {
-      increment = common::UnicycleStep(increment, m.v_mps, m.w_radps, m.dt_s);
-    }
-    robot.increment.push_back(increment);
-    robot.path.push_back(common::Compose(robot.path.back(), increment));
+    robot.motion.push_back(robot.calibration.Step(steps[r].odometry, steps[r].lidar.stamp.time_s, dt_s_));
+    robot.path.push_back(common::Compose(robot.path.back(), Increment(robot, t, robot.correction)));
   }
   for (auto& [id, chain] : chains_) {
     if (!chain.kinematics.is_static) chain.states.push_back(StepLandmark(chain.states.back(), chain.kinematics));
@@ -178,9 +174,17 @@ bool MapReference::UpdateInliers() {
   return changed;
 }
 
+Pose2 MapReference::Increment(const Robot& robot, int t, const Eigen::Vector3d& correction) {
+  Pose2 out;
+  for (const auto& m : robot.motion[t - 1]) {
+    out = common::UnicycleStep(out, correction(0) * m.v_mps, correction(1) * m.w_radps + correction(2), m.dt_s);
+  }
+  return out;
+}
+
 void MapReference::SolveOnce() {
   // Columns: every robot's poses (the first robot's from step 1, the others' from their first
-  // pose), then every chain's states in id order.
+  // pose), then every chain's states in id order, then (if estimated) every robot's correction.
   const int steps = static_cast<int>(robots_.front().path.size()) - 1;
   std::vector<int> robot_base(robots_.size());
   int cols = 0;
@@ -193,6 +197,11 @@ void MapReference::SolveOnce() {
     chain_col[id] = cols;
     cols += 3 * static_cast<int>(chain.states.size());
   }
+  const int correction_base = cols;
+  if (estimate_calibration_) cols += 3 * static_cast<int>(robots_.size());
+  auto correction_col = [&](int r) { return estimate_calibration_ ? correction_base + 3 * r : -1; };
+  const Eigen::Vector3d correction_prior(1.0, 1.0, 0.0);
+  const Eigen::Vector3d correction_w(1.0 / 0.1, 1.0 / 0.1, 1.0 / 0.05);
   auto robot_col = [&](int r, int t) {
     if (r == 0) return t == 0 ? -1 : robot_base[0] + 3 * (t - 1);
     return robot_base[r] + 3 * t;
@@ -206,11 +215,29 @@ void MapReference::SolveOnce() {
       const Robot& robot = robots_[r];
       const int ri = static_cast<int>(r);
       for (int t = 1; t <= steps; ++t) {
-        const Pose2& increment = robot.increment[t - 1];
+        const Pose2 increment = Increment(robot, t, robot.correction);
         const Pose2& previous = robot.path[t - 1];
         const Eigen::Vector3d res = robot_w.asDiagonal() * Minus(robot.path[t], common::Compose(previous, increment));
         const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
-        rows->Add(res, {{robot_col(ri, t), Eigen::MatrixXd(robot_w.asDiagonal())}, {robot_col(ri, t - 1), jf}});
+        // d increment / d correction by central differences; then through the composition.
+        Eigen::Matrix3d jc = Eigen::Matrix3d::Zero();
+        if (estimate_calibration_) {
+          constexpr double kH = 1e-6;
+          for (int c = 0; c < 3; ++c) {
+            Eigen::Vector3d d = Eigen::Vector3d::Zero();
+            d(c) = kH;
+            jc.col(c) = Minus(Increment(robot, t, robot.correction + d), Increment(robot, t, robot.correction - d)) /
+                        (2.0 * kH);
+          }
+          jc = -(robot_w.asDiagonal() * common::ComposeJacobianRight(previous, increment) * jc);
+        }
+        rows->Add(res, {{robot_col(ri, t), Eigen::MatrixXd(robot_w.asDiagonal())},
+                        {robot_col(ri, t - 1), jf},
+                        {correction_col(ri), jc}});
+      }
+      if (estimate_calibration_) {
+        rows->Add(correction_w.asDiagonal() * (correction_prior - robot.correction),
+                  {{correction_col(ri), -Eigen::MatrixXd(correction_w.asDiagonal())}});
       }
     }
     for (const auto& [id, chain] : chains_) {
@@ -269,6 +296,9 @@ void MapReference::SolveOnce() {
         const int col = chain_col[id] + 3 * static_cast<int>(i);
         chain.states[i] = Pose2::FromVector(chain.states[i].Vector() + sign * delta.segment<3>(col));
       }
+    }
+    for (std::size_t r = 0; r < robots_.size() && estimate_calibration_; ++r) {
+      robots_[r].correction += sign * delta.segment<3>(correction_col(static_cast<int>(r)));
     }
   };
   double lambda = 1e-6;

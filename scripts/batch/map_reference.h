@@ -33,7 +33,11 @@ namespace mrslam::batch {
 // whitened residual at the solution lies beyond that chi-square (2 dof) gate is left out and the
 // problem solved again until the set of such readings stays the same (at most 10 rounds), as
 // the filters ignore such readings. Add and Solve apart turn it into a smoother of a whole run
-// (Path: every pose). Pure; not thread-safe.
+// (Path: every pose). EstimateOdometryCalibration: per robot three more unknowns, a speed
+// factor s_v, a turn-rate factor s_w and a turn-rate bias b_w, the motion being the calibrated
+// odometry's (s_v v, s_w w + b_w), with priors N(1, 0.1^2), N(1, 0.1^2), N(0, (0.05 rad/s)^2):
+// a model of a real robot's systematic odometry errors that the fixed calibration leaves.
+// Pure; not thread-safe.
 class MapReference {
  public:
   // One robot, in its own frame. Throws std::invalid_argument for landmark models other than
@@ -57,6 +61,10 @@ class MapReference {
   void Add(const std::vector<common::SensorStep>& steps);
   // The MAP estimate of everything added so far (warm-started from the current one).
   void Solve();
+  // Estimates each robot's odometry factors and turn-rate bias too (call before Add).
+  void EstimateOdometryCalibration() { estimate_calibration_ = true; }
+  // Robot r's (s_v, s_w, b_w): (1, 1, 0) unless estimated.
+  const Eigen::Vector3d& OdometryCorrection(int r) const { return robots_.at(r).correction; }
   // Robot r of the set (0: the first): its current pose and its first pose, in the frame.
   const common::Pose2& Pose(int r = 0) const { return robots_.at(r).path.back(); }
   const common::Pose2& FirstPose(int r) const { return robots_.at(r).path.front(); }
@@ -80,10 +88,13 @@ class MapReference {
     std::string id;
     std::vector<common::Pose2> path;  // path[0]: the first pose
     robot_agent::OdometryCalibration calibration;
-    // increment[t - 1]: step t's motion in the robot's frame, x_t = Compose(x_{t-1}, increment)
-    // (a unicycle step is one), the calibrated odometry's segments composed.
-    std::vector<common::Pose2> increment;
+    // motion[t - 1]: step t's calibrated odometry segments.
+    std::vector<std::vector<robot_agent::OdometryCalibration::Motion>> motion;
+    Eigen::Vector3d correction{1.0, 1.0, 0.0};  // (s_v, s_w, b_w)
   };
+  // Step t's motion in the robot's frame under `correction`: x_t = Compose(x_{t-1}, increment)
+  // (a unicycle step is one), the corrected segments composed.
+  static common::Pose2 Increment(const Robot& robot, int t, const Eigen::Vector3d& correction);
   struct Reading {
     int step, robot;  // who read it, when
     int landmark_id;  // a landmark, or -1: robot `seen` of the set
@@ -103,6 +114,7 @@ class MapReference {
   double dt_s_;
   common::FilterOptions filter_;  // the odometry calibration and the outlier gate
   bool replay_;                   // a data set's landmarks (all static)
+  bool estimate_calibration_ = false;
   Eigen::Vector3d robot_var_, landmark_var_;
   double var_r_, var_b_;
   int robot_detections_from_step_;

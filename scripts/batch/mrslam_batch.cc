@@ -248,14 +248,17 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
 // rendezvous.enable_from_step on; only the first robot's first pose known, the others' started
 // from the truth displaced by (0.3 m, 0.3 m, 5 deg)), moved into each robot's own frame by its
 // known first pose (the solution is the same up to a rigid motion whichever first pose is the
-// known one); "alone", each robot's data alone. Landmark RMSE: the final map, all its landmarks
-// against the truth at the last step. Solved every kSolveEveryS of run time (warm-started: Gauss-
-// Newton from the dead-reckoned paths of a whole run falls into local minima) and at the end.
+// known one); "alone", each robot's data alone. Each also with every robot's odometry factors and
+// turn-rate bias estimated (MapReference::EstimateOdometryCalibration). Landmark RMSE: the final
+// map, all its landmarks against the truth at the last step. Solved every kSolveEveryS of run
+// time (warm-started: Gauss-Newton from the dead-reckoned paths of a whole run falls into local
+// minima) and at the end.
 constexpr double kSolveEveryS = 10.0;
 struct SmootherRun {
   RobotRun joint, alone;
 };
-std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::uint64_t seed, bool progress) {
+std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::uint64_t seed, bool calibrate,
+                                         bool progress) {
   options.seed = seed;
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
   const auto frames = source->Truth().frames;
@@ -273,6 +276,10 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   batch::MapReference joint(options, all, guesses, options.rendezvous.enable_from_step);
   std::vector<std::unique_ptr<batch::MapReference>> alone;
   for (int i = 0; i < n; ++i) alone.push_back(std::make_unique<batch::MapReference>(options, i));
+  if (calibrate) {
+    joint.EstimateOdometryCalibration();
+    for (auto& a : alone) a->EstimateOdometryCalibration();
+  }
   std::vector<std::vector<common::Pose2>> truth(n);  // in each robot's own frame, steps 1..
   common::GroundTruth last_truth;
   const int solve_every = std::max(1, static_cast<int>(std::lround(kSolveEveryS / options.run.dt_s)));
@@ -287,9 +294,10 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
     if (k % solve_every == 0 || k == options.run.steps) {
       joint.Solve();
       for (auto& a : alone) a->Solve();
-      if (progress)
-        std::fprintf(stderr, "\rseed %llu: step %d/%d solved", static_cast<unsigned long long>(seed), k,
-                     options.run.steps);  // NOLINT(runtime/int)
+      if (progress) {
+        std::fprintf(stderr, "\r%s: step %d/%d solved ", calibrate ? "odometry calibrated" : "as configured", k,
+                     options.run.steps);
+      }
     }
   }
   std::vector<evaluator::TruePoint> true_landmarks;
@@ -419,39 +427,46 @@ int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_
   return 0;
 }
 
-// --smoother: per robot, median and 90th percentile over the seeds, joint and alone.
+// --smoother: per robot, median and 90th percentile over the seeds, joint and alone, with the
+// configured odometry calibration and with it estimated.
 int PrintSmoother(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds, int threads,
                   const std::string& json_path) {
-  std::vector<std::vector<SmootherRun>> results(num_seeds);
-  ForEachSeed(num_seeds, threads,
-              [&](int s) { results[s] = RunSmootherSeed(options, first_seed + s, num_seeds == 1); });
+  // Task 2s + c: seed s, calibration estimated if c.
+  std::vector<std::vector<SmootherRun>> results(2 * num_seeds);
+  ForEachSeed(2 * num_seeds, threads, [&](int task) {
+    results[task] = RunSmootherSeed(options, first_seed + task / 2, task % 2 == 1, num_seeds == 1);
+  });
   nlohmann::json json;
   json["scenario"] = options.name;
   json["seeds"] = {first_seed, first_seed + num_seeds - 1};
   std::printf("scenario %s, seeds %llu..%llu, MAP smoother of the whole run, median (p90) over seeds\n",
               options.name.c_str(), static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
               static_cast<unsigned long long>(first_seed + num_seeds - 1));       // NOLINT(runtime/int)
-  std::printf("%-6s %-18s %-34s %s\n", "robot", "metric", "all robots jointly", "each robot alone");
-  std::vector<double> joint_medians, alone_medians;
+  const char* kVariants[] = {"jointly", "jointly, odometry calibrated", "alone", "alone, odometry calibrated"};
+  std::printf("%-6s %-17s", "robot", "metric");
+  for (const char* v : kVariants) std::printf(" %28s", v);
+  std::printf("\n");
+  std::vector<std::vector<double>> position_medians(4);
   for (std::size_t i = 0; i < options.robots.size(); ++i) {
     const std::string& id = options.robots[i].id;
     for (int m = 0; m < 3; ++m) {
-      std::vector<double> joint, alone;
-      for (const auto& r : results) {
-        joint.push_back(Metric(r[i].joint, m));
-        alone.push_back(Metric(r[i].alone, m));
+      std::printf("%-6s %-17s", id.c_str(), kMetricNames[m]);
+      for (int v = 0; v < 4; ++v) {
+        std::vector<double> values;
+        for (int s = 0; s < num_seeds; ++s) {
+          const SmootherRun& r = results[2 * s + v % 2][i];
+          values.push_back(Metric(v < 2 ? r.joint : r.alone, m));
+        }
+        std::printf("      %8.3f (p90 %8.3f)", evaluator::Median(values), evaluator::Percentile(values, 90.0));
+        json["robots"][id][kMetricNames[m]][kVariants[v]] = values;
+        if (m == 0) position_medians[v].push_back(evaluator::Median(values));
       }
-      std::printf("%-6s %-18s %8.3f (%8.3f)%16s %8.3f (%8.3f)\n", id.c_str(), kMetricNames[m], evaluator::Median(joint),
-                  evaluator::Percentile(joint, 90.0), "", evaluator::Median(alone), evaluator::Percentile(alone, 90.0));
-      json["robots"][id][kMetricNames[m]] = {{"joint", joint}, {"alone", alone}};
-      if (m == 0) {
-        joint_medians.push_back(evaluator::Median(joint));
-        alone_medians.push_back(evaluator::Median(alone));
-      }
+      std::printf("\n");
     }
   }
-  std::printf("median over the robots of the position RMSE: jointly %.3f m, alone %.3f m\n",
-              evaluator::Median(joint_medians), evaluator::Median(alone_medians));
+  std::printf("median over the robots of the position RMSE:");
+  for (int v = 0; v < 4; ++v)
+    std::printf(" %s %.3f m%s", kVariants[v], evaluator::Median(position_medians[v]), v < 3 ? ";" : "\n");
   WriteJson(json, json_path);
   return 0;
 }
