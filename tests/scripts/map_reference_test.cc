@@ -152,6 +152,29 @@ TEST(MapReference, LeavesOutAReadingBeyondTheOutlierGate) {
   EXPECT_GT(LargestDifference(SmoothedPath(o, clean), gated), 1e-3);
 }
 
+TEST(MapReference, EstimatesTheOdometryErrorsTheCalibrationLeaves) {
+  // The robot moves as commanded, but its calibration says 0.9 x the speed and 1.1 x the turn
+  // rate: with little noise the smoother finds the speed factor that undoes it, 1 / 0.9, and the
+  // turn rate the robot moves at (its command is a constant 0.2 rad/s, so factor and bias are not
+  // told apart: their priors split the correction).
+  common::ScenarioOptions o =
+      PaperScenario({"noise.robot_process_var=[1e-8, 1e-8, 1e-8]", "noise.landmark_process_var=[1e-8, 1e-8, 1e-8]",
+                     "sensors.lidar.range_noise_sd_m=1e-3", "sensors.lidar.bearing_noise_sd_rad=1e-3",
+                     "filter.odometry_scale=0.9", "filter.odometry_turn_scale=1.1"});
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
+  MapReference reference(o, 0);
+  reference.EstimateOdometryCalibration();
+  for (int k = 1; k <= 40; ++k) {
+    reference.Add({source->Step().at(0)});
+    if (k % 5 == 0) reference.Solve();
+  }
+  const Eigen::Vector3d c = reference.OdometryCorrection(0);
+  EXPECT_NEAR(c(0), 1.0 / 0.9, 1e-3);
+  EXPECT_NEAR(c(1) * 1.1 * 0.2 + c(2), 0.2, 1e-4);
+  EXPECT_GT(std::abs(c(1) - 1.0), 1e-3);  // both share the correction
+  EXPECT_GT(std::abs(c(2)), 1e-3);
+}
+
 TEST(MapReference, RejectsWhatItCannotModel) {
   const common::ScenarioOptions field =
       common::LoadScenario(std::string(MRSLAM_TEST_SOURCE_DIR) + "/config/dynamic_world.yaml", {});
