@@ -96,10 +96,10 @@ class MapReference {
   // (a unicycle step is one), the corrected segments composed.
   static common::Pose2 Increment(const Robot& robot, int t, const Eigen::Vector3d& correction);
   struct Reading {
-    int step, robot;  // who read it, when
-    int landmark_id;  // a landmark, or -1: robot `seen` of the set
-    int seen;
-    double range_m, bearing_rad;
+    int step = 0, robot = 0;  // who read it, when
+    int landmark_id = -1;     // a landmark, or -1: robot `seen` of the set
+    int seen = -1;
+    double range_m = 0.0, bearing_rad = 0.0;
     bool inlier = true;  // within the outlier gate at the last solution
   };
 

@@ -266,6 +266,8 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   std::vector<int> all;
   std::vector<common::Pose2> guesses;
   std::vector<common::Pose2> starts;  // each robot's known first pose in its own frame
+  all.reserve(n);
+  starts.reserve(n);
   for (int i = 0; i < n; ++i) {
     all.push_back(i);
     starts.push_back(robot_agent::InitialPoseInOwnFrame(options.robots[i]));
@@ -275,6 +277,7 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   }
   batch::MapReference joint(options, all, guesses, options.rendezvous.enable_from_step);
   std::vector<std::unique_ptr<batch::MapReference>> alone;
+  alone.reserve(n);
   for (int i = 0; i < n; ++i) alone.push_back(std::make_unique<batch::MapReference>(options, i));
   if (calibrate) {
     joint.EstimateOdometryCalibration();
@@ -364,6 +367,21 @@ void ForEachSeed(int num_seeds, int threads, const Fn& fn) {
   if (!error.empty()) throw std::runtime_error(error);
 }
 
+// Prints the first line of a report ("scenario NAME, seeds A..B, WHAT") and returns the report's
+// JSON with the scenario and the seeds.
+nlohmann::json StartReport(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds,
+                           const std::string& what) {
+  const std::uint64_t last_seed = first_seed + num_seeds - 1;
+  std::printf("scenario %s, seeds %llu..%llu, %s\n", options.name.c_str(),
+              static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
+              static_cast<unsigned long long>(last_seed),   // NOLINT(runtime/int)
+              what.c_str());
+  nlohmann::json json;
+  json["scenario"] = options.name;
+  json["seeds"] = {first_seed, last_seed};
+  return json;
+}
+
 void WriteJson(const nlohmann::json& json, const std::string& path) {
   if (path.empty()) return;
   std::ofstream out(path);
@@ -384,12 +402,8 @@ int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_
   ForEachSeed(num_seeds, threads, [&](int s) {
     for (const auto& [i, j] : pairs) results[s].push_back(RunTransformSeed(options, first_seed + s, i, j));
   });
-  nlohmann::json json;
-  json["scenario"] = options.name;
-  json["seeds"] = {first_seed, first_seed + num_seeds - 1};
-  std::printf("scenario %s, seeds %llu..%llu, transform at the end of the first encounter, joint MAP reference\n",
-              options.name.c_str(), static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
-              static_cast<unsigned long long>(first_seed + num_seeds - 1));       // NOLINT(runtime/int)
+  nlohmann::json json =
+      StartReport(options, first_seed, num_seeds, "transform at the end of the first encounter, joint MAP reference");
   std::printf("%-12s %5s  %-31s  %s\n", "holder<-peer", "met", "joint reference: m / deg (p90)",
               "own references + exact mutual: m / deg (p90)");
   for (std::size_t p = 0; p < pairs.size(); ++p) {
@@ -432,16 +446,12 @@ int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_
 int PrintSmoother(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds, int threads,
                   const std::string& json_path) {
   // Task 2s + c: seed s, calibration estimated if c.
-  std::vector<std::vector<SmootherRun>> results(2 * num_seeds);
+  std::vector<std::vector<SmootherRun>> results(2 * static_cast<std::size_t>(num_seeds));
   ForEachSeed(2 * num_seeds, threads, [&](int task) {
     results[task] = RunSmootherSeed(options, first_seed + task / 2, task % 2 == 1, num_seeds == 1);
   });
-  nlohmann::json json;
-  json["scenario"] = options.name;
-  json["seeds"] = {first_seed, first_seed + num_seeds - 1};
-  std::printf("scenario %s, seeds %llu..%llu, MAP smoother of the whole run, median (p90) over seeds\n",
-              options.name.c_str(), static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
-              static_cast<unsigned long long>(first_seed + num_seeds - 1));       // NOLINT(runtime/int)
+  nlohmann::json json =
+      StartReport(options, first_seed, num_seeds, "MAP smoother of the whole run, median (p90) over seeds");
   const char* kVariants[] = {"jointly", "jointly, odometry calibrated", "alone", "alone, odometry calibrated"};
   std::printf("%-6s %-17s", "robot", "metric");
   for (const char* v : kVariants) std::printf(" %28s", v);
@@ -516,18 +526,12 @@ int Main(int argc, char** argv) {
   const std::uint64_t first = first_seed;  // a structured binding is not captured before C++20
   ForEachSeed(num_seeds, threads, [&](int s) { results[s] = RunSeed(options, first + s, reference); });
 
-  nlohmann::json json;
-  json["scenario"] = options.name;
-  json["seeds"] = {first_seed, last_seed};
   const std::string estimator =
       reference ? std::string("the MAP reference")
                 : options.filter.type + " with " + std::to_string(options.filter.particles) + " particles";
+  nlohmann::json json = StartReport(options, first_seed, num_seeds, estimator);
   json["particles"] = options.filter.particles;
   json["filter"] = reference ? std::string("reference") : options.filter.type;
-  std::printf("scenario %s, seeds %llu..%llu, %s\n", options.name.c_str(),
-              static_cast<unsigned long long>(first_seed),  // NOLINT(runtime/int)
-              static_cast<unsigned long long>(last_seed),   // NOLINT(runtime/int)
-              estimator.c_str());
   std::printf("%-6s %-24s %10s %10s\n", "robot", "metric", "median", "p90");
   for (std::size_t i = 0; i < options.robots.size(); ++i) {
     const std::string& id = options.robots[i].id;

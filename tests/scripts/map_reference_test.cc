@@ -135,6 +135,7 @@ TEST(MapReference, LeavesOutAReadingBeyondTheOutlierGate) {
   common::ScenarioOptions o = PaperScenario();
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
   std::vector<common::SensorStep> clean;
+  clean.reserve(o.run.steps);
   for (int k = 0; k < o.run.steps; ++k) clean.push_back(source->Step().at(0));
   std::vector<common::SensorStep> corrupted = clean, without = clean;
   std::size_t k = 50;
