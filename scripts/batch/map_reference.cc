@@ -155,19 +155,23 @@ int MapReference::StateIndex(const Chain& chain, int t) {
   return chain.kinematics.is_static ? 0 : t - chain.first_step;
 }
 
+Eigen::Vector2d MapReference::Target(const Reading& z) const {
+  if (z.landmark_id < 0) return robots_[z.seen].path[z.step].Translation();
+  const Chain& chain = chains_.at(z.landmark_id);
+  return chain.states[StateIndex(chain, z.step)].Translation();
+}
+
+Eigen::Vector2d MapReference::WhitenedResidual(const Reading& z) const {
+  const common::RangeBearing h = common::MeasureRangeBearing(robots_[z.robot].path[z.step], Target(z));
+  return {(z.range_m - h.range_m) / Sd(var_r_), WrapAngle(z.bearing_rad - h.bearing_rad) / Sd(var_b_)};
+}
+
 bool MapReference::UpdateInliers() {
   if (filter_.outlier_gate_probability >= 1.0) return false;
   const double gate = common::ChiSquare2Quantile(filter_.outlier_gate_probability);
   bool changed = false;
   for (Reading& z : readings_) {
-    const Eigen::Vector2d p =
-        z.landmark_id >= 0
-            ? chains_.at(z.landmark_id).states[StateIndex(chains_.at(z.landmark_id), z.step)].Translation()
-            : robots_[z.seen].path[z.step].Translation();
-    const common::RangeBearing h = common::MeasureRangeBearing(robots_[z.robot].path[z.step], p);
-    const double d2 = (z.range_m - h.range_m) * (z.range_m - h.range_m) / std::max(var_r_, 1e-12) +
-                      std::pow(WrapAngle(z.bearing_rad - h.bearing_rad), 2) / std::max(var_b_, 1e-12);
-    const bool inlier = d2 <= gate;
+    const bool inlier = WhitenedResidual(z).squaredNorm() <= gate;
     changed = changed || inlier != z.inlier;
     z.inlier = inlier;
   }
@@ -260,18 +264,11 @@ void MapReference::SolveOnce() {
     for (const Reading& z : readings_) {
       if (!z.inlier) continue;
       const Pose2& x = robots_[z.robot].path[z.step];
-      Eigen::Vector2d p;
-      int target_col = 0;
-      if (z.landmark_id >= 0) {
-        const Chain& chain = chains_.at(z.landmark_id);
-        p = chain.states[StateIndex(chain, z.step)].Translation();
-        target_col = chain_col[z.landmark_id] + 3 * StateIndex(chain, z.step);
-      } else {
-        p = robots_[z.seen].path[z.step].Translation();
-        target_col = robot_col(z.seen, z.step);
-      }
-      const common::RangeBearing h = common::MeasureRangeBearing(x, p);
-      const Eigen::Vector2d res(z_w(0) * (z.range_m - h.range_m), z_w(1) * WrapAngle(z.bearing_rad - h.bearing_rad));
+      const Eigen::Vector2d p = Target(z);
+      const int target_col = z.landmark_id >= 0
+                                 ? chain_col[z.landmark_id] + 3 * StateIndex(chains_.at(z.landmark_id), z.step)
+                                 : robot_col(z.seen, z.step);
+      const Eigen::Vector2d res = WhitenedResidual(z);
       // Jacobians of the residual (z - h): -dh.
       const Eigen::MatrixXd jx = -robot_agent::MeasurementJacobianPose(p, x);
       Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, 3);

@@ -108,6 +108,10 @@ class MapReference {
   static int StateIndex(const Chain& chain, int t);  // of a landmark's state at step t
   // Gauss-Newton with Levenberg damping over the inlying readings.
   void SolveOnce();
+  // A reading's target (landmark or robot position) and its residual z - h, whitened, at the
+  // current solution.
+  Eigen::Vector2d Target(const Reading& z) const;
+  Eigen::Vector2d WhitenedResidual(const Reading& z) const;
   // Marks the readings within the outlier gate at the current solution; true if any changed.
   bool UpdateInliers();
 
