@@ -168,30 +168,27 @@ double EkfSlam::AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_ou
 }
 
 void EkfSlam::SightPoint(const Detection& det, Eigen::Vector2d* point, Eigen::Matrix2d* cov) const {
-  // m = g(R, z) = p_R + r (cos a, sin a), a = phi + b;
-  //   G_R = [1 0 -r sin a; 0 1 r cos a],  G_z = [cos a, -r sin a; sin a, r cos a].
-  const double a = x_(2) + det.bearing_rad, c = std::cos(a), s = std::sin(a), r = det.range_m;
-  *point = Eigen::Vector2d(x_(0) + r * c, x_(1) + r * s);
-  Eigen::Matrix<double, 2, 3> g_r;
-  g_r << 1.0, 0.0, -r * s, 0.0, 1.0, r * c;
-  Eigen::Matrix2d g_z;
-  g_z << c, -r * s, s, r * c;
-  *cov = g_r * p_.topLeftCorner<3, 3>() * g_r.transpose() + g_z * r_ * g_z.transpose();
+  const Sighting g = Sight(x_.head<3>(), det.range_m, det.bearing_rad);
+  *point = g.l;
+  *cov = g.g_r * p_.topLeftCorner<3, 3>() * g.g_r.transpose() + g.g_z * r_ * g.g_z.transpose();
+}
+
+TimedSighting EkfSlam::SensorSighting(const Detection& det) const {
+  const Sighting g = Sight(x_.head<3>(), det.range_m, det.bearing_rad);
+  return {time_s_, g.l, g.g_z * r_ * g.g_z.transpose()};
 }
 
 void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, int origin_robot,
                           std::uint32_t origin_track, bool moving) {
   const int n = static_cast<int>(x_.size());
-  const double a = x_(2) + det.bearing_rad, c = std::cos(a), s = std::sin(a), r = det.range_m;
-  Eigen::Matrix<double, 2, 3> g_r;
-  g_r << 1.0, 0.0, -r * s, 0.0, 1.0, r * c;
-  Eigen::Matrix2d g_z;
-  g_z << c, -r * s, s, r * c;
+  const Sighting g = Sight(x_.head<3>(), det.range_m, det.bearing_rad);
+  const Eigen::Matrix<double, 2, 3>& g_r = g.g_r;
+  const Eigen::Matrix2d& g_z = g.g_z;
   // P_mX = G_R P_RX (full cross-covariance), P_mm = G_R P_RR G_R^T + G_z R G_z^T.
   const Eigen::MatrixXd p_mx = g_r * p_.topRows(3);
   const Eigen::Matrix2d p_mm = g_r * p_.topLeftCorner<3, 3>() * g_r.transpose() + g_z * r_ * g_z.transpose();
   x_.conservativeResize(n + 2);
-  x_.segment<2>(n) = Eigen::Vector2d(x_(0) + r * c, x_(1) + r * s);
+  x_.segment<2>(n) = g.l;
   p_.conservativeResize(n + 2, n + 2);
   p_.block(n, 0, 2, n) = p_mx;
   p_.block(0, n, n, 2) = p_mx.transpose();
@@ -203,6 +200,7 @@ void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int land
   slot.origin_track = origin_track;
   slot.last_seen_step = step_;
   slot.moving = moving;
+  if (moving) slot.probation_sightings.push_back(SensorSighting(det));
   slots_.push_back(slot);
 }
 
@@ -373,18 +371,31 @@ void EkfSlam::Process(const common::SensorStep& step) {
     moving = ElaTest(x_, p_, obs, r_(0, 0), r_(1, 1), ela_gate_d2_).moving;
   }
 
-  // Correction with the map landmarks that stood still. One on probation that stood still has
-  // stayed within its area one more frame; after ela_return_after_frames such frames it is back.
+  // One on probation within its area has stayed there one more frame; after
+  // ela_return_after_frames such frames it is back in the map if it showed no velocity meanwhile,
+  // else it moved.
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    const auto [d, s] = matches[i];
+    Slot& slot = slots_[s];
+    if (moving[i] || !slot.moving) continue;
+    slot.probation_sightings.push_back(SensorSighting(detections[d]));
+    if (++slot.stay_frames < filter_.ela_return_after_frames) continue;
+    if (VelocityD2(slot.probation_sightings) > ela_gate_d2_) {
+      moving[i] = true;
+      continue;
+    }
+    slot.moving = false;
+    slot.stay_frames = 0;
+    slot.probation_sightings.clear();
+  }
+
+  // Correction with the map landmarks that stood still.
   for (std::size_t i = 0; i < matches.size(); ++i) {
     if (moving[i]) continue;
     const auto [d, s] = matches[i];
     Slot& slot = slots_[s];
     slot.last_seen_step = step_;
     slot.misses = 0;
-    if (slot.moving && ++slot.stay_frames >= filter_.ela_return_after_frames) {
-      slot.moving = false;
-      slot.stay_frames = 0;
-    }
     if (!slot.moving) {
       JosephUpdate(&x_, &p_, s, Eigen::Vector2d(detections[d].range_m, detections[d].bearing_rad), r_);
     }

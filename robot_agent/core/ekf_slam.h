@@ -11,6 +11,7 @@
 #include "common/config/scenario_options.h"
 #include "common/sensor_types.h"
 #include "robot_agent/core/association.h"
+#include "robot_agent/core/ela.h"
 #include "robot_agent/core/slam_filter.h"
 
 namespace mrslam::robot_agent {
@@ -48,7 +49,9 @@ namespace mrslam::robot_agent {
 //     is not used for correction and is reported with moving = tentative = true (not part of the
 //     map). Each frame it is seen, the ELA test checks it against the pose and the map landmarks
 //     seen with it: outside, it is re-initialized again; inside for ela_return_after_frames frames,
-//     it is back in the map. An expected but unmatched map landmark (or an unmatched one on
+//     it is back in the map if its sightings on probation show no velocity (VelocityD2 within
+//     the ELA gate, ela.h), else it is re-initialized again: a slow mover stays within its area
+//     for some frames, but not still. An expected but unmatched map landmark (or an unmatched one on
 //     probation) that a leftover detection explains by motion (within the gate once a motion of
 //     up to max_landmark_speed dt n is taken off the residual, n = frames since last seen, at
 //     most 2 for a map landmark) moved too; a map landmark expected in view and not seen at all is
@@ -108,8 +111,9 @@ class EkfSlam : public SlamFilter {
     std::uint32_t origin_track = 0;
     std::uint32_t last_seen_step = 0;
     int misses = 0;
-    bool moving = false;  // on probation (ekf_ela, step 6)
-    int stay_frames = 0;  // frames on probation within its area
+    bool moving = false;                             // on probation (ekf_ela, step 6)
+    int stay_frames = 0;                             // frames on probation within its area
+    std::vector<TimedSighting> probation_sightings;  // since it was put on probation
   };
   struct Detection {
     double range_m = 0.0;
@@ -139,6 +143,8 @@ class EkfSlam : public SlamFilter {
   void RemoveSlots(std::vector<int> slots);
   // The observed point g(R, z) and its covariance through the pose (no cross terms with m).
   void SightPoint(const Detection& det, Eigen::Vector2d* point, Eigen::Matrix2d* cov) const;
+  // The observed point g(R, z) now, with the covariance of the sensor noise alone.
+  TimedSighting SensorSighting(const Detection& det) const;
   bool ExpectedInView(int s) const;
   // ekf_ela, step 6 for the detections left over after association and the unmatched slots.
   void HandleLeftovers(const std::vector<Detection>& detections, std::vector<std::uint8_t>* det_used,

@@ -6,25 +6,14 @@
 #include <Eigen/LU>
 
 namespace mrslam::robot_agent {
-namespace {
-
-// The inverse sensor model l = g(R, z) and its Jacobians for one observation.
-struct Sighting {
-  Eigen::Vector2d l;
-  Eigen::Matrix<double, 2, 3> g_r;  // dl / d(x_R, y_R, phi_R)
-  Eigen::Matrix2d g_z;              // dl / d(r, b)
-};
-
-Sighting Sight(const Eigen::VectorXd& x, const ElaObservation& o) {
-  const double a = x(2) + o.bearing_rad, c = std::cos(a), s = std::sin(a), r = o.range_m;
+Sighting Sight(const Eigen::Vector3d& pose, double range_m, double bearing_rad) {
+  const double a = pose(2) + bearing_rad, c = std::cos(a), s = std::sin(a), r = range_m;
   Sighting out;
-  out.l = Eigen::Vector2d(x(0) + r * c, x(1) + r * s);
+  out.l = Eigen::Vector2d(pose(0) + r * c, pose(1) + r * s);
   out.g_r << 1.0, 0.0, -r * s, 0.0, 1.0, r * c;
   out.g_z << c, -r * s, s, r * c;
   return out;
 }
-
-}  // namespace
 
 ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std::vector<ElaObservation>& observations,
                   double var_r, double var_b, double gate_d2) {
@@ -52,7 +41,7 @@ ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std:
   }
   std::vector<Sighting> sightings;
   sightings.reserve(k);
-  for (const auto& o : observations) sightings.push_back(Sight(x, o));
+  for (const auto& o : observations) sightings.push_back(Sight(x.head<3>(), o.range_m, o.bearing_rad));
   auto map_col = [](int i) { return 3 + 2 * i; };
   auto z_col = [k](int i) { return 3 + 2 * k + 2 * i; };
   auto map_mean = [&](int i) -> Eigen::Vector2d { return x.segment<2>(3 + 2 * observations[i].slot); };
@@ -142,6 +131,36 @@ ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std:
     result.moving[i] = result.d2[i] > gate_d2;
   }
   return result;
+}
+
+double VelocityD2(const std::vector<TimedSighting>& sightings) {
+  if (sightings.size() < 2) return 0.0;
+  // Times about their mean keep the normal matrix well conditioned.
+  double t0 = 0.0;
+  for (const auto& s : sightings) t0 += s.time_s;
+  t0 /= static_cast<double>(sightings.size());
+  // Normal equations N (a, v) = b with N = sum [W, tW; tW, t^2 W], b = sum [W p; t W p], W = C^-1.
+  Eigen::Matrix4d n = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d b = Eigen::Vector4d::Zero();
+  for (const auto& s : sightings) {
+    const Eigen::LDLT<Eigen::Matrix2d> ldlt(s.cov);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return 0.0;
+    const Eigen::Matrix2d w = ldlt.solve(Eigen::Matrix2d::Identity());
+    const double t = s.time_s - t0;
+    n.topLeftCorner<2, 2>() += w;
+    n.topRightCorner<2, 2>() += t * w;
+    n.bottomLeftCorner<2, 2>() += t * w;
+    n.bottomRightCorner<2, 2>() += t * t * w;
+    b.head<2>() += w * s.point;
+    b.tail<2>() += t * w * s.point;
+  }
+  const Eigen::FullPivLU<Eigen::Matrix4d> lu(n);
+  if (!lu.isInvertible()) return 0.0;
+  const Eigen::Matrix4d n_inv = lu.inverse();
+  const Eigen::Vector2d v = (n_inv * b).tail<2>();
+  const Eigen::LDLT<Eigen::Matrix2d> cov_v(n_inv.bottomRightCorner<2, 2>());
+  const double d2 = v.dot(cov_v.solve(v));
+  return std::isfinite(d2) ? d2 : 0.0;
 }
 
 }  // namespace mrslam::robot_agent

@@ -19,6 +19,16 @@ struct ElaObservation {
   bool reference = true;
 };
 
+// The inverse sensor model l = g(R, z) = (x_R + r cos(phi_R + b), y_R + r sin(phi_R + b)), with
+// its Jacobians G_R = dl / d(x_R, y_R, phi_R) = [1 0 -r sin a; 0 1 r cos a] and
+// G_z = dl / d(r, b) = [cos a, -r sin a; sin a, r cos a], a = phi_R + b.
+struct Sighting {
+  Eigen::Vector2d l;
+  Eigen::Matrix<double, 2, 3> g_r;
+  Eigen::Matrix2d g_z;
+};
+Sighting Sight(const Eigen::Vector3d& pose, double range_m, double bearing_rad);
+
 // The outcome per observation (same order as the input).
 struct ElaResult {
   std::vector<bool> moving;
@@ -53,5 +63,21 @@ struct ElaResult {
 // references left standing.
 ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std::vector<ElaObservation>& observations,
                   double var_r, double var_b, double gate_d2);
+
+// Where a landmark was seen at one time, in the own frame, with the covariance of the sensor
+// noise in that point (G_z R G_z^T: over a few frames the pose's error changes little against it).
+struct TimedSighting {
+  double time_s = 0.0;
+  Eigen::Vector2d point = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Identity();
+};
+
+// Did a landmark stand still over its sightings? The weighted least-squares line p_k = a + v t_k,
+// (a, v) minimizing sum_k (p_k - a - v t_k)^T C_k^-1 (p_k - a - v t_k), gives the velocity v with
+// covariance V (the v block of the inverse normal matrix); returns d2 = v^T V^-1 v, chi-square with
+// 2 dof when the landmark stood still (0 with fewer than two distinct times). It sees a slow
+// motion that ElaTest, which compares one sighting with the landmark's estimate through the
+// pose's whole covariance, lets pass: the slope uses every sighting, and only the sensor's noise.
+double VelocityD2(const std::vector<TimedSighting>& sightings);
 
 }  // namespace mrslam::robot_agent

@@ -1,11 +1,13 @@
 // Paper B's expected-landmark-area test: on a hand-built joint state (a landmark that jumped
 // beyond its gate is flagged, the others kept, alone or among others; one on probation is tested
 // and predicts nothing), in the ekf_ela filter (a landmark that jumps is taken out of the map
-// while its neighbours stay; it returns after staying put), and in a static world (dynamic_world
+// while its neighbours stay; it returns after staying put, not while it creeps), the velocity
+// test of a landmark's sightings on probation (chi-square when still), and in a static world (dynamic_world
 // with moving_fraction 0: under 1 % of the observations flagged, landmark RMSE at most 5 % above
 // the plain EKF's, robot RMSE within 5 % of it).
 #include "robot_agent/core/ela.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -118,24 +120,63 @@ TEST(ElaTest, SingleLandmarkIsTestedThroughThePose) {
   EXPECT_TRUE(ElaTest(jump.x, jump.p, jump.obs, kVarR, kVarB, kGate).moving[0]);
 }
 
-// The filter: a robot driving slowly among 6 landmarks; at step 30 landmark 0 jumps 1.5 m and
-// stays there. ekf_ela takes it out of the map (moving, not used), keeps the others, and once it
-// has stayed put for ela_return_after_frames frames it is back in the map, near its new place.
-TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
-  common::ScenarioOptions o = testing::OneRobotScenario(0.2, 0.05, 1);
-  o.run.dt_s = 1.0;
-  o.filter.type = "ekf_ela";
-  o.filter.ela_return_after_frames = 5;
-  o.filter.max_landmark_speed_mps = 2.0;  // the 1.5 m jump is within a frame's reach of motion
-  o.noise.robot_process_var = Eigen::Vector3d(1e-4, 1e-4, 1e-4);
+// Sightings at 5 m range with 0.05 m / 1 degree noise, one per second for 6 s, of a point that
+// stands still or creeps at `speed` along x.
+std::vector<TimedSighting> Sightings(double speed, common::Rng* rng) {
+  const Eigen::Vector3d robot(0.0, 0.0, 0.0);
+  std::vector<TimedSighting> out;
+  out.reserve(6);
+  for (int k = 0; k < 6; ++k) {
+    const Eigen::Vector2d truth(3.0 + speed * k, 4.0);
+    const Eigen::Vector2d z = EkfSlam::Measure(robot, truth);
+    const Sighting g =
+        Sight(robot, z(0) + rng->Normal(0.0, std::sqrt(kVarR)), z(1) + rng->Normal(0.0, std::sqrt(kVarB)));
+    out.push_back(
+        {static_cast<double>(k), g.l, g.g_z * Eigen::Vector2d(kVarR, kVarB).asDiagonal() * g.g_z.transpose()});
+  }
+  return out;
+}
+
+TEST(ElaTest, VelocityOfStillSightingsIsChiSquareAndACreeperStandsOut) {
+  // Without noise, a still point has no velocity at all.
+  std::vector<TimedSighting> exact(4, {0.0, Eigen::Vector2d(1.0, 2.0), 0.01 * Eigen::Matrix2d::Identity()});
+  for (int k = 0; k < 4; ++k) exact[k].time_s = 10.0 + k;
+  EXPECT_NEAR(VelocityD2(exact), 0.0, 1e-12);
+  EXPECT_EQ(VelocityD2({exact[0]}), 0.0) << "one sighting says nothing about velocity";
+  // With noise, d2 of a still point is chi-square with 2 dof: mean 2 (sd of the mean of 4000
+  // draws 0.045), and beyond the 0.999 gate about once in a thousand.
+  common::Rng rng(11, "velocity");
+  double sum = 0.0;
+  int beyond = 0, creeper_beyond = 0;
+  constexpr int kDraws = 4000;
+  for (int i = 0; i < kDraws; ++i) {
+    const double d2 = VelocityD2(Sightings(0.0, &rng));
+    sum += d2;
+    beyond += d2 > kGate ? 1 : 0;
+    // 0.1 m/s moves the point 0.5 m in 5 s.
+    creeper_beyond += VelocityD2(Sightings(0.1, &rng)) > kGate ? 1 : 0;
+  }
+  EXPECT_NEAR(sum / kDraws, 2.0, 0.15);
+  EXPECT_LT(beyond, 12);
+  EXPECT_GT(creeper_beyond, kDraws * 9 / 10);
+}
+
+// The filter: a robot driving slowly among 6 landmarks for 50 steps; at step 30 landmark 0 jumps
+// 1.5 m, then moves on at creep_mps along x. check(k, filter) runs after each step; returns the
+// filter, the robot's true pose and landmark 0's place at the end.
+struct JumperRun {
+  common::Pose2 robot;
+  Eigen::Vector2d jumper;
+};
+template <typename Check>
+JumperRun RunJumper(EkfSlam* ekf, double creep_mps, Check check) {
   std::vector<Eigen::Vector2d> landmarks = {{2.0, 2.0}, {-2.0, 3.0}, {3.0, -2.0}, {-3.0, -2.0}, {0.0, 4.0}, {4.0, 0.5}};
-  EkfSlam ekf(o, "r1", /*ela=*/true);
   common::Rng rng(9, "ela_filter");
   common::Pose2 robot;
-  const Eigen::Vector2d jumped = landmarks[0] + Eigen::Vector2d(1.5, 0.0);
   for (int k = 1; k <= 50; ++k) {
     robot = common::UnicycleStep(robot, 0.2, 0.05, 1.0);
-    if (k == 30) landmarks[0] = jumped;
+    if (k == 30) landmarks[0] += Eigen::Vector2d(1.5, 0.0);
+    if (k > 30) landmarks[0] += Eigen::Vector2d(creep_mps, 0.0);
     common::SensorStep step;
     step.lidar.stamp.step = static_cast<std::uint32_t>(k);
     step.lidar.stamp.time_s = k;
@@ -145,39 +186,73 @@ TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
       step.lidar.landmarks.push_back({static_cast<double>(k), z.range_m + rng.Normal(0.0, 0.05),
                                       common::WrapAngle(z.bearing_rad + rng.Normal(0.0, 0.02)), -1});
     }
-    ekf.Process(step);
-    if (k == 29) {
-      EXPECT_EQ(ekf.NumMapped(), 6);
-      EXPECT_EQ(ekf.NumMoving(), 0);
-      EXPECT_EQ(ekf.FlaggedObservations(), 0);
-    }
-    if (k == 30) {
-      EXPECT_EQ(ekf.NumMapped(), 5) << "the jumper left the map";
-      EXPECT_EQ(ekf.NumMoving(), 1);
-      const std::vector<MovedLandmark> moved = ekf.TakeMovedLandmarks();
-      ASSERT_EQ(moved.size(), 1u);
-      EXPECT_LT((moved[0].position - jumped).norm(), 0.3);
-      const FilterEstimate e = ekf.Estimate();
-      int moving = 0;
-      for (const auto& l : e.landmarks) {
-        if (l.moving) {
-          ++moving;
-          EXPECT_TRUE(l.tentative);
-          EXPECT_LT((l.mean.head<2>() - jumped).norm(), 0.3);
-        } else {
-          EXPECT_GT((l.mean.head<2>() - landmarks[0]).norm(), 1.0) << "no stale copy of the jumper";
-        }
-      }
-      EXPECT_EQ(moving, 1);
-    }
+    ekf->Process(step);
+    check(k, *ekf);
   }
+  return {robot, landmarks[0]};
+}
+
+common::ScenarioOptions JumperScenario() {
+  common::ScenarioOptions o = testing::OneRobotScenario(0.2, 0.05, 1);
+  o.run.dt_s = 1.0;
+  o.filter.type = "ekf_ela";
+  o.filter.ela_return_after_frames = 5;
+  o.filter.max_landmark_speed_mps = 2.0;  // the 1.5 m jump is within a frame's reach of motion
+  o.noise.robot_process_var = Eigen::Vector3d(1e-4, 1e-4, 1e-4);
+  return o;
+}
+
+// The jumper stays where it landed: ekf_ela takes it out of the map (moving, not used), keeps the
+// others, and once it has stayed put for ela_return_after_frames frames it is back in the map,
+// near its new place.
+TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
+  EkfSlam ekf(JumperScenario(), "r1", /*ela=*/true);
+  const Eigen::Vector2d before(2.0, 2.0), jumped = before + Eigen::Vector2d(1.5, 0.0);
+  const JumperRun run = RunJumper(&ekf, 0.0, [&](int k, EkfSlam& f) {
+    if (k == 29) {
+      EXPECT_EQ(f.NumMapped(), 6);
+      EXPECT_EQ(f.NumMoving(), 0);
+      EXPECT_EQ(f.FlaggedObservations(), 0);
+    }
+    if (k != 30) return;
+    EXPECT_EQ(f.NumMapped(), 5) << "the jumper left the map";
+    EXPECT_EQ(f.NumMoving(), 1);
+    const std::vector<MovedLandmark> moved = f.TakeMovedLandmarks();
+    ASSERT_EQ(moved.size(), 1u);
+    EXPECT_LT((moved[0].position - jumped).norm(), 0.3);
+    int moving = 0;
+    for (const auto& l : f.Estimate().landmarks) {
+      if (l.moving) {
+        ++moving;
+        EXPECT_TRUE(l.tentative);
+        EXPECT_LT((l.mean.head<2>() - jumped).norm(), 0.3);
+      } else {
+        EXPECT_GT((l.mean.head<2>() - before).norm(), 1.0) << "no stale copy of the jumper";
+      }
+    }
+    EXPECT_EQ(moving, 1);
+  });
   // Stayed put from step 31 on: back in the map, at its new place.
   EXPECT_EQ(ekf.NumMapped(), 6);
   EXPECT_EQ(ekf.NumMoving(), 0);
   bool found = false;
   for (const auto& l : ekf.Estimate().landmarks) found |= (l.mean.head<2>() - jumped).norm() < 0.3 && !l.moving;
   EXPECT_TRUE(found);
-  EXPECT_LT((ekf.Estimate().pose.Translation() - robot.Translation()).norm(), 0.3);
+  EXPECT_LT((ekf.Estimate().pose.Translation() - run.robot.Translation()).norm(), 0.3);
+}
+
+// The jumper creeps on at 0.1 m/s: each ela_return_after_frames frames it stays within its area
+// (0.5 m), but its sightings show the velocity, so it never comes back into the map, and the
+// pose stays as good as with the still jumper.
+TEST(ElaTest, FilterKeepsACreepingLandmarkOutOfTheMap) {
+  EkfSlam ekf(JumperScenario(), "r1", /*ela=*/true);
+  int mapped_after_jump = 0;
+  const JumperRun run = RunJumper(&ekf, 0.1, [&](int k, EkfSlam& f) {
+    if (k >= 30) mapped_after_jump = std::max(mapped_after_jump, f.NumMapped());
+  });
+  EXPECT_EQ(mapped_after_jump, 5) << "the creeper came back into the map";
+  EXPECT_EQ(ekf.NumMoving(), 1);
+  EXPECT_LT((ekf.Estimate().pose.Translation() - run.robot.Translation()).norm(), 0.3);
 }
 
 // Landmark RMSE per paper B's eqs. 17-18 (mean over frames of the per-frame RMSE over the map)
