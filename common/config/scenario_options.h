@@ -162,9 +162,11 @@ struct FilterOptions {
   double max_landmark_position_sd_m = 2.0;
   // ekf_ela (paper B): chi-square 2 dof gate of the expected-landmark-area test; frames a moving
   // landmark must stay within its own gate before it re-enters the map; frames a mapped landmark
-  // may be expected in view and not seen before it is deleted (paper B's Algorithm 1: 1).
+  // may be expected in view and not seen before it is deleted (paper B's Algorithm 1: 1); frames
+  // over which a mapped landmark's position innovations are averaged for the drift test (0: off).
   double ela_gate_probability = 0.999;
   int ela_return_after_frames = 5;
+  int ela_drift_window_frames = 3;
   int ela_drop_unseen_after_frames = 1;
   double resample_ess_fraction = 0.5;
   bool resample_every_step = false;

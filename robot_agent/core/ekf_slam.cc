@@ -148,7 +148,7 @@ void EkfSlam::Predict(const common::SensorStep& step) {
   p_.topLeftCorner<3, 3>() += noise_.robot_process_var.asDiagonal();
 }
 
-double EkfSlam::AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_out) const {
+double EkfSlam::AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_out, Eigen::Vector2d* nu_out) const {
   const int j = 3 + 2 * s;
   const Eigen::Vector3d robot = x_.head<3>();
   const Eigen::Vector2d m = x_.segment<2>(j);
@@ -163,6 +163,7 @@ double EkfSlam::AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_ou
   if (s_out != nullptr) *s_out = innovation_cov;
   Eigen::Vector2d nu = Eigen::Vector2d(det.range_m, det.bearing_rad) - Measure(robot, m);
   nu(1) = WrapAngle(nu(1));
+  if (nu_out != nullptr) *nu_out = nu;
   const auto d2 = common::MahalanobisSquared<2>(nu, innovation_cov);
   return d2 ? *d2 : std::numeric_limits<double>::infinity();
 }
@@ -369,6 +370,25 @@ void EkfSlam::Process(const common::SensorStep& step) {
       obs.push_back({s, detections[d].range_m, detections[d].bearing_rad, !slots_[s].moving});
     }
     moving = ElaTest(x_, p_, obs, r_(0, 0), r_(1, 1), ela_gate_d2_).moving;
+  }
+
+  // Drift: a mapped landmark that stood within its area in each frame may still creep, its
+  // estimate trailing it; the mean of its last ela_drift_window_frames position innovations then
+  // stands out (MeanD2; a static landmark's innovations are white with covariance G_z S G_z^T).
+  const int drift_window = filter_.ela_drift_window_frames;
+  for (std::size_t i = 0; ela_ && drift_window > 0 && i < matches.size(); ++i) {
+    const auto [d, s] = matches[i];
+    Slot& slot = slots_[s];
+    if (moving[i] || slot.moving) continue;
+    Eigen::Matrix2d innovation_cov;
+    Eigen::Vector2d nu;
+    AssociationD2(detections[d], s, &innovation_cov, &nu);
+    const Sighting g = Sight(x_.head<3>(), detections[d].range_m, detections[d].bearing_rad);
+    slot.innovations.push_back({time_s_, g.g_z * nu, g.g_z * innovation_cov * g.g_z.transpose()});
+    if (static_cast<int>(slot.innovations.size()) > drift_window) slot.innovations.erase(slot.innovations.begin());
+    if (static_cast<int>(slot.innovations.size()) == drift_window && MeanD2(slot.innovations) > ela_gate_d2_) {
+      moving[i] = true;
+    }
   }
 
   // One on probation within its area has stayed there one more frame; after

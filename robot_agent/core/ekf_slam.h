@@ -35,7 +35,10 @@ namespace mrslam::robot_agent {
 //     the map landmarks before those on probation). An unmatched detection beyond
 //     chi2_2(new_landmark_probability) of every landmark starts one.
 //  3. (ekf_ela) the ELA test (ela.h) over the matched landmarks, those on probation tested
-//     against the map landmarks; the moving ones are not used for correction.
+//     against the map landmarks; the moving ones are not used for correction. A mapped landmark
+//     within its area whose last ela_drift_window_frames position innovations G_z nu (covariance
+//     G_z S G_z^T, white for a static landmark) have a weighted mean beyond the same gate
+//     (MeanD2) moved too: a creeping landmark's estimate trails it, each frame within the gate.
 //  4. Update, one detection at a time, in Joseph form with the sparse H:
 //       K = P H^T S^-1,  A = (I - K H) P = P - K (H P),
 //       P = A (I - K H)^T + K R K^T = A - (A H^T) K^T + K R K^T   (O(n^2)), then symmetrized.
@@ -114,6 +117,7 @@ class EkfSlam : public SlamFilter {
     bool moving = false;                             // on probation (ekf_ela, step 6)
     int stay_frames = 0;                             // frames on probation within its area
     std::vector<TimedSighting> probation_sightings;  // since it was put on probation
+    std::vector<TimedSighting> innovations;          // a map landmark's last position innovations
   };
   struct Detection {
     double range_m = 0.0;
@@ -131,8 +135,9 @@ class EkfSlam : public SlamFilter {
 
   int NumSlots() const { return static_cast<int>(slots_.size()); }
   void Predict(const common::SensorStep& step);
-  // d2 and innovation covariance of detection det against slot s.
-  double AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_out = nullptr) const;
+  // d2, innovation covariance and innovation of detection det against slot s.
+  double AssociationD2(const Detection& det, int s, Eigen::Matrix2d* s_out = nullptr,
+                       Eigen::Vector2d* nu_out = nullptr) const;
   // Appends a landmark from detection det (step 5), on probation if moving, with its provenance.
   void AddLandmark(const Detection& det, std::uint32_t track_id, int landmark_id, int origin_robot,
                    std::uint32_t origin_track, bool moving);

@@ -163,4 +163,20 @@ double VelocityD2(const std::vector<TimedSighting>& sightings) {
   return std::isfinite(d2) ? d2 : 0.0;
 }
 
+double MeanD2(const std::vector<TimedSighting>& points) {
+  Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d weighted = Eigen::Vector2d::Zero();
+  for (const auto& p : points) {
+    const Eigen::LDLT<Eigen::Matrix2d> ldlt(p.cov);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return 0.0;
+    const Eigen::Matrix2d w = ldlt.solve(Eigen::Matrix2d::Identity());
+    information += w;
+    weighted += w * p.point;
+  }
+  const Eigen::LDLT<Eigen::Matrix2d> ldlt(information);
+  if (ldlt.info() != Eigen::Success) return 0.0;
+  const double d2 = weighted.dot(ldlt.solve(weighted));
+  return std::isfinite(d2) ? d2 : 0.0;
+}
+
 }  // namespace mrslam::robot_agent

@@ -80,4 +80,8 @@ struct TimedSighting {
 // pose's whole covariance, lets pass: the slope uses every sighting, and only the sensor's noise.
 double VelocityD2(const std::vector<TimedSighting>& sightings);
 
+// The weighted least-squares mean b of the points (b = (sum C_k^-1)^-1 sum C_k^-1 p_k) against zero:
+// d2 = b^T (sum C_k^-1) b, chi-square with 2 dof for independent zero-mean points.
+double MeanD2(const std::vector<TimedSighting>& points);
+
 }  // namespace mrslam::robot_agent

@@ -1,10 +1,11 @@
 // Paper B's expected-landmark-area test: on a hand-built joint state (a landmark that jumped
 // beyond its gate is flagged, the others kept, alone or among others; one on probation is tested
-// and predicts nothing), in the ekf_ela filter (a landmark that jumps is taken out of the map
-// while its neighbours stay; it returns after staying put, not while it creeps), the velocity
-// test of a landmark's sightings on probation (chi-square when still), and in a static world (dynamic_world
-// with moving_fraction 0: under 1 % of the observations flagged, landmark RMSE at most 5 % above
-// the plain EKF's, robot RMSE within 5 % of it).
+// and predicts nothing); the two creep tests' statistics (velocity of sightings, mean of
+// innovations: chi-square when still, a creep stands out); in the ekf_ela filter (a landmark that
+// jumps is taken out of the map while its neighbours stay; it returns after staying put, not
+// while it creeps; a mapped landmark that starts to creep is taken out by the drift test); and in
+// a static world (dynamic_world with moving_fraction 0: under 1 % of the observations flagged,
+// landmark RMSE at most 5 % above the plain EKF's, robot RMSE within 5 % of it).
 #include "robot_agent/core/ela.h"
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include "common/config/scenario_options.h"
 #include "common/rng.h"
@@ -161,21 +163,50 @@ TEST(ElaTest, VelocityOfStillSightingsIsChiSquareAndACreeperStandsOut) {
   EXPECT_GT(creeper_beyond, kDraws * 9 / 10);
 }
 
+// The weighted mean of zero-mean points against zero is chi-square with 2 dof; a bias stands out.
+TEST(ElaTest, MeanOfWhiteInnovationsIsChiSquareAndABiasStandsOut) {
+  common::Rng rng(12, "mean");
+  Eigen::Matrix2d cov;
+  cov << 0.04, 0.01, 0.01, 0.02;
+  const Eigen::Matrix2d chol = cov.llt().matrixL();
+  auto draws = [&](const Eigen::Vector2d& bias) {
+    std::vector<TimedSighting> points(3);
+    for (auto& p : points) {
+      p.point = bias + chol * Eigen::Vector2d(rng.Normal(0.0, 1.0), rng.Normal(0.0, 1.0));
+      p.cov = cov;
+    }
+    return points;
+  };
+  double sum = 0.0;
+  int biased_beyond = 0;
+  constexpr int kDraws = 4000;
+  for (int i = 0; i < kDraws; ++i) {
+    sum += MeanD2(draws(Eigen::Vector2d::Zero()));
+    // 0.6 m along x: d2 has a non-centrality of 31 against the gate of 13.8.
+    biased_beyond += MeanD2(draws(Eigen::Vector2d(0.6, 0.0))) > kGate ? 1 : 0;
+  }
+  EXPECT_NEAR(sum / kDraws, 2.0, 0.15);
+  EXPECT_GT(biased_beyond, kDraws * 9 / 10);
+  // One point: its own squared Mahalanobis distance.
+  const TimedSighting one{0.0, Eigen::Vector2d(0.2, 0.1), cov};
+  EXPECT_NEAR(MeanD2({one}), one.point.dot(cov.ldlt().solve(one.point)), 1e-12);
+}
+
 // The filter: a robot driving slowly among 6 landmarks for 50 steps; at step 30 landmark 0 jumps
-// 1.5 m, then moves on at creep_mps along x. check(k, filter) runs after each step; returns the
+// jump_m along x, then moves on at creep_mps along x. check(k, filter) runs after each step; returns the
 // filter, the robot's true pose and landmark 0's place at the end.
 struct JumperRun {
   common::Pose2 robot;
   Eigen::Vector2d jumper;
 };
 template <typename Check>
-JumperRun RunJumper(EkfSlam* ekf, double creep_mps, Check check) {
+JumperRun RunJumper(EkfSlam* ekf, double jump_m, double creep_mps, Check check) {
   std::vector<Eigen::Vector2d> landmarks = {{2.0, 2.0}, {-2.0, 3.0}, {3.0, -2.0}, {-3.0, -2.0}, {0.0, 4.0}, {4.0, 0.5}};
   common::Rng rng(9, "ela_filter");
   common::Pose2 robot;
   for (int k = 1; k <= 50; ++k) {
     robot = common::UnicycleStep(robot, 0.2, 0.05, 1.0);
-    if (k == 30) landmarks[0] += Eigen::Vector2d(1.5, 0.0);
+    if (k == 30) landmarks[0] += Eigen::Vector2d(jump_m, 0.0);
     if (k > 30) landmarks[0] += Eigen::Vector2d(creep_mps, 0.0);
     common::SensorStep step;
     step.lidar.stamp.step = static_cast<std::uint32_t>(k);
@@ -208,7 +239,7 @@ common::ScenarioOptions JumperScenario() {
 TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
   EkfSlam ekf(JumperScenario(), "r1", /*ela=*/true);
   const Eigen::Vector2d before(2.0, 2.0), jumped = before + Eigen::Vector2d(1.5, 0.0);
-  const JumperRun run = RunJumper(&ekf, 0.0, [&](int k, EkfSlam& f) {
+  const JumperRun run = RunJumper(&ekf, 1.5, 0.0, [&](int k, EkfSlam& f) {
     if (k == 29) {
       EXPECT_EQ(f.NumMapped(), 6);
       EXPECT_EQ(f.NumMoving(), 0);
@@ -247,12 +278,35 @@ TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
 TEST(ElaTest, FilterKeepsACreepingLandmarkOutOfTheMap) {
   EkfSlam ekf(JumperScenario(), "r1", /*ela=*/true);
   int mapped_after_jump = 0;
-  const JumperRun run = RunJumper(&ekf, 0.1, [&](int k, EkfSlam& f) {
+  const JumperRun run = RunJumper(&ekf, 1.5, 0.1, [&](int k, EkfSlam& f) {
     if (k >= 30) mapped_after_jump = std::max(mapped_after_jump, f.NumMapped());
   });
   EXPECT_EQ(mapped_after_jump, 5) << "the creeper came back into the map";
   EXPECT_EQ(ekf.NumMoving(), 1);
   EXPECT_LT((ekf.Estimate().pose.Translation() - run.robot.Translation()).norm(), 0.3);
+}
+
+// A mapped landmark starts to creep at 0.03 m/s at step 30, with no jump: each frame it is within
+// its area, as its estimate trails it, but the mean of its last innovations gives it away; with
+// the drift test off it stays in the map longer and pulls the pose further.
+TEST(ElaTest, DriftTestTakesACreepingMapLandmarkOut) {
+  auto first_flag = [](int drift_window, double* pose_error) {
+    common::ScenarioOptions o = JumperScenario();
+    o.filter.ela_drift_window_frames = drift_window;
+    EkfSlam ekf(o, "r1", /*ela=*/true);
+    int flagged_at = 0;
+    const JumperRun run = RunJumper(&ekf, 0.0, 0.03, [&](int k, EkfSlam& f) {
+      if (flagged_at == 0 && f.FlaggedObservations() > 0) flagged_at = k;
+    });
+    *pose_error = (ekf.Estimate().pose.Translation() - run.robot.Translation()).norm();
+    return flagged_at;
+  };
+  double error_on = 0.0, error_off = 0.0;
+  const int on = first_flag(3, &error_on), off = first_flag(0, &error_off);
+  EXPECT_GT(on, 30);
+  EXPECT_LE(on, 37) << "0.21 m of creep";
+  EXPECT_TRUE(off == 0 || off > on) << "off: " << off << ", on: " << on;
+  EXPECT_LT(error_on, 0.3);
 }
 
 // Landmark RMSE per paper B's eqs. 17-18 (mean over frames of the per-frame RMSE over the map)
