@@ -358,6 +358,7 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     d.ela_gate_probability = f.Get("ela_gate_probability", d.ela_gate_probability);
     d.ela_return_after_frames = f.Get("ela_return_after_frames", d.ela_return_after_frames);
     d.ela_drift_window_frames = f.Get("ela_drift_window_frames", d.ela_drift_window_frames);
+    d.ela_outside_frames_to_move = f.Get("ela_outside_frames_to_move", d.ela_outside_frames_to_move);
     d.ela_drop_unseen_after_frames = f.Get("ela_drop_unseen_after_frames", d.ela_drop_unseen_after_frames);
     d.resample_ess_fraction = f.Get("resample_ess_fraction", d.resample_ess_fraction);
     d.resample_every_step = f.Get("resample_every_step", d.resample_every_step);
@@ -587,6 +588,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           "must be at least 1");
   c.Check(f.ela_drift_window_frames == 0 || f.ela_drift_window_frames >= 2, "filter.ela_drift_window_frames",
           f.ela_drift_window_frames, "must be 0 (off) or at least 2");
+  c.Check(f.ela_outside_frames_to_move >= 1, "filter.ela_outside_frames_to_move", f.ela_outside_frames_to_move,
+          "must be at least 1");
   c.Check(f.ela_drop_unseen_after_frames >= 1, "filter.ela_drop_unseen_after_frames", f.ela_drop_unseen_after_frames,
           "must be at least 1");
   c.Check(f.resample_ess_fraction >= 0.0 && f.resample_ess_fraction <= 1.0, "filter.resample_ess_fraction",

@@ -167,6 +167,9 @@ struct FilterOptions {
   double ela_gate_probability = 0.999;
   int ela_return_after_frames = 5;
   int ela_drift_window_frames = 3;
+  // ekf_ela: frames in a row a mapped landmark must be found outside its area (by the ELA or the
+  // drift test) before it is taken out of the map as moving (1: at once, as paper B).
+  int ela_outside_frames_to_move = 2;
   int ela_drop_unseen_after_frames = 1;
   double resample_ess_fraction = 0.5;
   bool resample_every_step = false;

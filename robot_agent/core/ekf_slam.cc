@@ -426,6 +426,13 @@ void EkfSlam::Process(const common::SensorStep& step) {
   restarts_.clear();
   if (ela_) {
     for (std::size_t i = 0; i < matches.size(); ++i) {
+      // A map landmark moved once it has been outside ela_outside_frames_to_move frames in a row
+      // (those frames are not used for correction); one on probation at once.
+      Slot& slot = slots_[matches[i].second];
+      if (!slot.moving) {
+        slot.outside_frames = moving[i] ? slot.outside_frames + 1 : 0;
+        if (slot.outside_frames < filter_.ela_outside_frames_to_move) continue;
+      }
       if (moving[i]) Restart(matches[i].second, detections[matches[i].first], &removals);
     }
     HandleLeftovers(detections, &det_used, slot_done, &removals);

@@ -35,10 +35,12 @@ namespace mrslam::robot_agent {
 //     the map landmarks before those on probation). An unmatched detection beyond
 //     chi2_2(new_landmark_probability) of every landmark starts one.
 //  3. (ekf_ela) the ELA test (ela.h) over the matched landmarks, those on probation tested
-//     against the map landmarks; the moving ones are not used for correction. A mapped landmark
+//     against the map landmarks; those outside are not used for correction. A mapped landmark
 //     within its area whose last ela_drift_window_frames position innovations G_z nu (covariance
 //     G_z S G_z^T, white for a static landmark) have a weighted mean beyond the same gate
-//     (MeanD2) moved too: a creeping landmark's estimate trails it, each frame within the gate.
+//     (MeanD2) is outside too: a creeping landmark's estimate trails it, each frame within the
+//     gate. One on probation outside moved; a mapped one moved once it has been outside
+//     ela_outside_frames_to_move frames in a row.
 //  4. Update, one detection at a time, in Joseph form with the sparse H:
 //       K = P H^T S^-1,  A = (I - K H) P = P - K (H P),
 //       P = A (I - K H)^T + K R K^T = A - (A H^T) K^T + K R K^T   (O(n^2)), then symmetrized.
@@ -116,6 +118,7 @@ class EkfSlam : public SlamFilter {
     int misses = 0;
     bool moving = false;                             // on probation (ekf_ela, step 6)
     int stay_frames = 0;                             // frames on probation within its area
+    int outside_frames = 0;                          // a map landmark's frames in a row outside its area
     std::vector<TimedSighting> probation_sightings;  // since it was put on probation
     std::vector<TimedSighting> innovations;          // a map landmark's last position innovations
   };
