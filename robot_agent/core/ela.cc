@@ -1,6 +1,7 @@
 #include "robot_agent/core/ela.h"
 
 #include <cmath>
+#include <optional>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -133,6 +134,17 @@ ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std:
   return result;
 }
 
+namespace {
+
+// C^-1 of a positive definite 2 x 2 covariance; nothing otherwise.
+std::optional<Eigen::Matrix2d> Information(const Eigen::Matrix2d& cov) {
+  const Eigen::LDLT<Eigen::Matrix2d> ldlt(cov);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::nullopt;
+  return ldlt.solve(Eigen::Matrix2d::Identity());
+}
+
+}  // namespace
+
 double VelocityD2(const std::vector<TimedSighting>& sightings) {
   if (sightings.size() < 2) return 0.0;
   // Times about their mean keep the normal matrix well conditioned.
@@ -143,9 +155,9 @@ double VelocityD2(const std::vector<TimedSighting>& sightings) {
   Eigen::Matrix4d n = Eigen::Matrix4d::Zero();
   Eigen::Vector4d b = Eigen::Vector4d::Zero();
   for (const auto& s : sightings) {
-    const Eigen::LDLT<Eigen::Matrix2d> ldlt(s.cov);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return 0.0;
-    const Eigen::Matrix2d w = ldlt.solve(Eigen::Matrix2d::Identity());
+    const std::optional<Eigen::Matrix2d> info = Information(s.cov);
+    if (!info) return 0.0;
+    const Eigen::Matrix2d& w = *info;
     const double t = s.time_s - t0;
     n.topLeftCorner<2, 2>() += w;
     n.topRightCorner<2, 2>() += t * w;
@@ -167,11 +179,10 @@ double MeanD2(const std::vector<TimedSighting>& points) {
   Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
   Eigen::Vector2d weighted = Eigen::Vector2d::Zero();
   for (const auto& p : points) {
-    const Eigen::LDLT<Eigen::Matrix2d> ldlt(p.cov);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return 0.0;
-    const Eigen::Matrix2d w = ldlt.solve(Eigen::Matrix2d::Identity());
-    information += w;
-    weighted += w * p.point;
+    const std::optional<Eigen::Matrix2d> w = Information(p.cov);
+    if (!w) return 0.0;
+    information += *w;
+    weighted += *w * p.point;
   }
   const Eigen::LDLT<Eigen::Matrix2d> ldlt(information);
   if (ldlt.info() != Eigen::Success) return 0.0;
