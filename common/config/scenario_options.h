@@ -161,15 +161,17 @@ struct FilterOptions {
   // a peer's landmark beyond it is not merged.
   double max_landmark_position_sd_m = 2.0;
   // ekf_ela (paper B): chi-square 2 dof gate of the expected-landmark-area test; frames a moving
-  // landmark must stay within its own gate before it re-enters the map; frames a mapped landmark
-  // may be expected in view and not seen before it is deleted (paper B's Algorithm 1: 1); frames
-  // over which a mapped landmark's position innovations are averaged for the drift test (0: off).
+  // landmark must stay within its own gate before it re-enters the map.
   double ela_gate_probability = 0.999;
   int ela_return_after_frames = 5;
+  // ekf_ela: frames over which a mapped landmark's position innovations are averaged for the
+  // drift test (0: off, as paper B).
   int ela_drift_window_frames = 3;
-  // ekf_ela: frames in a row a mapped landmark must be found outside its area (by the ELA or the
-  // drift test) before it is taken out of the map as moving (1: at once, as paper B).
+  // ekf_ela: sightings in a row a mapped landmark must be found outside its area (by the ELA or
+  // the drift test) before it is taken out of the map as moving (1: at once, as paper B's rule).
   int ela_outside_frames_to_move = 2;
+  // ekf_ela: frames a mapped landmark may be expected in view and not seen before it is deleted
+  // (paper B's Algorithm 1: 1).
   int ela_drop_unseen_after_frames = 1;
   double resample_ess_fraction = 0.5;
   bool resample_every_step = false;

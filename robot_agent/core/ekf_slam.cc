@@ -238,7 +238,7 @@ void EkfSlam::RemoveSlots(std::vector<int> slots) {
     }
     keep.push_back(3 + 2 * s);
     keep.push_back(4 + 2 * s);
-    kept_slots.push_back(slots_[s]);
+    kept_slots.push_back(std::move(slots_[s]));
   }
   const Eigen::VectorXd x = x_(keep);
   const Eigen::MatrixXd p = p_(keep, keep);
@@ -260,7 +260,6 @@ bool EkfSlam::ExpectedInView(int s) const {
 }
 
 void EkfSlam::Restart(int s, const Detection& det, std::vector<int>* removals) {
-  ++flagged_observations_;
   removals->push_back(s);
   restarts_.push_back({det, slots_[s].track_id, slots_[s].landmark_id, slots_[s].origin_robot, slots_[s].origin_track});
   if (slots_[s].moving) return;
@@ -307,6 +306,7 @@ void EkfSlam::HandleLeftovers(const std::vector<Detection>& detections, std::vec
     (*det_used)[d] = 1;
     // The landmark is seen outside its expected area: it moved.
     ++matched_observations_;
+    ++flagged_observations_;
     Restart(s, detections[d], removals);
   }
 }
@@ -408,6 +408,7 @@ void EkfSlam::Process(const common::SensorStep& step) {
     slot.stay_frames = 0;
     slot.probation_sightings.clear();
   }
+  flagged_observations_ += std::count(moving.begin(), moving.end(), true);
 
   // Correction with the map landmarks that stood still.
   for (std::size_t i = 0; i < matches.size(); ++i) {
@@ -426,12 +427,18 @@ void EkfSlam::Process(const common::SensorStep& step) {
   restarts_.clear();
   if (ela_) {
     for (std::size_t i = 0; i < matches.size(); ++i) {
-      // A map landmark moved once it has been outside ela_outside_frames_to_move frames in a row
-      // (those frames are not used for correction); one on probation at once.
+      // A map landmark moved once it has been seen outside ela_outside_frames_to_move times in a
+      // row (frames it is not seen in do not break the run; the sightings outside are not used for
+      // correction, but it was seen); one on probation at once. A drift flag is confirmed by the
+      // next frame's window, which shares all but one innovation with it.
       Slot& slot = slots_[matches[i].second];
       if (!slot.moving) {
         slot.outside_frames = moving[i] ? slot.outside_frames + 1 : 0;
-        if (slot.outside_frames < filter_.ela_outside_frames_to_move) continue;
+        if (slot.outside_frames < filter_.ela_outside_frames_to_move) {
+          slot.last_seen_step = step_;
+          slot.misses = 0;
+          continue;
+        }
       }
       if (moving[i]) Restart(matches[i].second, detections[matches[i].first], &removals);
     }
@@ -518,6 +525,9 @@ int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_fra
       ++added;
       continue;
     }
+    // The fused estimate starts the drift and outside counts afresh.
+    slots_[own_slot[match[i]]].innovations.clear();
+    slots_[own_slot[match[i]]].outside_frames = 0;
     // A position observation of slot j: H = [0 .. I .. 0], H P = P rows j, j+1.
     const int j = 3 + 2 * own_slot[match[i]];
     const int n = static_cast<int>(x_.size());

@@ -95,7 +95,9 @@ class EkfSlam : public SlamFilter {
   }
   const Eigen::VectorXd& State() const { return x_; }
   const Eigen::MatrixXd& Covariance() const { return p_; }
-  // Counts over the run: matched observations of mapped landmarks, and those the ELA flagged.
+  // Counts over the run: matched observations of mapped landmarks, and those the ELA flagged
+  // moving (outside the area, drifting, or with a velocity on probation), whether or not the flag
+  // has yet taken the landmark out of the map.
   std::int64_t MatchedObservations() const { return matched_observations_; }
   std::int64_t FlaggedObservations() const { return flagged_observations_; }
 
@@ -116,11 +118,13 @@ class EkfSlam : public SlamFilter {
     std::uint32_t origin_track = 0;
     std::uint32_t last_seen_step = 0;
     int misses = 0;
-    bool moving = false;                             // on probation (ekf_ela, step 6)
-    int stay_frames = 0;                             // frames on probation within its area
-    int outside_frames = 0;                          // a map landmark's frames in a row outside its area
-    std::vector<TimedSighting> probation_sightings;  // since it was put on probation
-    std::vector<TimedSighting> innovations;          // a map landmark's last position innovations
+    bool moving = false;     // on probation (ekf_ela, step 6)
+    int stay_frames = 0;     // frames on probation within its area
+    int outside_frames = 0;  // a map landmark's sightings in a row outside its area
+    // Since it was put on probation: the first from that frame's corrected pose, the later ones
+    // from each frame's predicted pose.
+    std::vector<TimedSighting> probation_sightings;
+    std::vector<TimedSighting> innovations;  // a map landmark's last position innovations
   };
   struct Detection {
     double range_m = 0.0;

@@ -78,6 +78,7 @@ struct TimedSighting {
 // 2 dof when the landmark stood still (0 with fewer than two distinct times). It sees a slow
 // motion that ElaTest, which compares one sighting with the landmark's estimate through the
 // pose's whole covariance, lets pass: the slope uses every sighting, and only the sensor's noise.
+// The pose's own error is not in C_k, so a pose that drifts over the sightings adds to v.
 double VelocityD2(const std::vector<TimedSighting>& sightings);
 
 // The weighted least-squares mean b of the points (b = (sum C_k^-1)^-1 sum C_k^-1 p_k) against zero:
