@@ -360,6 +360,8 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     d.ela_drift_window_frames = f.Get("ela_drift_window_frames", d.ela_drift_window_frames);
     d.ela_outside_frames_to_move = f.Get("ela_outside_frames_to_move", d.ela_outside_frames_to_move);
     d.ela_drop_unseen_after_frames = f.Get("ela_drop_unseen_after_frames", d.ela_drop_unseen_after_frames);
+    d.ela_young_sightings = f.Get("ela_young_sightings", d.ela_young_sightings);
+    d.ela_young_creep_share = f.Get("ela_young_creep_share", d.ela_young_creep_share);
     d.resample_ess_fraction = f.Get("resample_ess_fraction", d.resample_ess_fraction);
     d.resample_every_step = f.Get("resample_every_step", d.resample_every_step);
     d.odometry_scale = f.Get("odometry_scale", d.odometry_scale);
@@ -590,6 +592,10 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           f.ela_drift_window_frames, "must be 0 (off) or at least 2");
   c.Check(f.ela_outside_frames_to_move >= 1, "filter.ela_outside_frames_to_move", f.ela_outside_frames_to_move,
           "must be at least 1");
+  c.Check(f.ela_young_sightings >= 0, "filter.ela_young_sightings", f.ela_young_sightings,
+          "must be at least 0 (0: off)");
+  c.Check(f.ela_young_creep_share >= 0.0 && f.ela_young_creep_share <= 1.0, "filter.ela_young_creep_share",
+          f.ela_young_creep_share, "must be in [0, 1]");
   c.Check(f.ela_drop_unseen_after_frames >= 1, "filter.ela_drop_unseen_after_frames", f.ela_drop_unseen_after_frames,
           "must be at least 1");
   c.Check(f.resample_ess_fraction >= 0.0 && f.resample_ess_fraction <= 1.0, "filter.resample_ess_fraction",

@@ -173,6 +173,12 @@ struct FilterOptions {
   // ekf_ela: frames a mapped landmark may be expected in view and not seen before it is deleted
   // (paper B's Algorithm 1: 1).
   int ela_drop_unseen_after_frames = 1;
+  // ekf_ela: once the share of observations flagged so far as creeping (by the drift test or the
+  // velocity test on return from probation) reaches ela_young_creep_share, a newly mapped landmark
+  // corrects only itself, not the pose nor the other landmarks, for its first ela_young_sightings
+  // sightings (0: off, as paper B).
+  int ela_young_sightings = 10;
+  double ela_young_creep_share = 0.005;
   double resample_ess_fraction = 0.5;
   bool resample_every_step = false;
   // Odometry calibration (FastSLAM): the robot moves at odometry_scale times the commanded

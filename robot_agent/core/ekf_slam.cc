@@ -25,6 +25,10 @@ constexpr double kUnknownHeadingVar = kPi * kPi / 3.0;
 // A ghost (expected, unmatched mapped landmark) may be explained by motion over at most this
 // many frames since it was last seen.
 constexpr int kMaxGhostMotionFrames = 2;
+// Unflagged observations counted before the first, so that an early false alarm or two (the
+// drift and velocity tests flag about 1 - ela_gate_probability of a static world's observations)
+// do not make the landmarks look creeping.
+constexpr std::int64_t kCreepSharePriorObservations = 200;
 
 // Symmetrizes a square matrix in place: P = (P + P^T) / 2.
 void Symmetrize(Eigen::MatrixXd* p) {
@@ -87,7 +91,7 @@ void EkfSlam::MeasureJacobians(const Eigen::Vector3d& robot, const Eigen::Vector
 }
 
 bool EkfSlam::JosephUpdate(Eigen::VectorXd* x, Eigen::MatrixXd* p, int slot, const Eigen::Vector2d& z,
-                           const Eigen::Matrix2d& r) {
+                           const Eigen::Matrix2d& r, bool landmark_only) {
   const int j = 3 + 2 * slot;
   const Eigen::Vector3d robot = x->head<3>();
   const Eigen::Vector2d m = x->segment<2>(j);
@@ -100,7 +104,12 @@ bool EkfSlam::JosephUpdate(Eigen::VectorXd* x, Eigen::MatrixXd* p, int slot, con
   const Eigen::LLT<Eigen::Matrix2d> llt(s);
   if (llt.info() != Eigen::Success) return false;
   // K = P H^T S^-1 = (H P)^T S^-1 (P symmetric).
-  const Eigen::MatrixXd k = llt.solve(hp).transpose();
+  Eigen::MatrixXd k = llt.solve(hp).transpose();
+  if (landmark_only) {
+    const Eigen::Matrix2d k_m = k.middleRows(j, 2);
+    k.setZero();
+    k.middleRows(j, 2) = k_m;
+  }
   Eigen::Vector2d nu = z - Measure(robot, m);
   nu(1) = WrapAngle(nu(1));
   *x += k * nu;
@@ -388,6 +397,7 @@ void EkfSlam::Process(const common::SensorStep& step) {
     if (static_cast<int>(slot.innovations.size()) > drift_window) slot.innovations.erase(slot.innovations.begin());
     if (static_cast<int>(slot.innovations.size()) == drift_window && MeanD2(slot.innovations) > ela_gate_d2_) {
       moving[i] = true;
+      ++creep_flags_;
     }
   }
 
@@ -402,6 +412,7 @@ void EkfSlam::Process(const common::SensorStep& step) {
     if (++slot.stay_frames < filter_.ela_return_after_frames) continue;
     if (VelocityD2(slot.probation_sightings) > ela_gate_d2_) {
       moving[i] = true;
+      ++creep_flags_;
       continue;
     }
     slot.moving = false;
@@ -410,7 +421,14 @@ void EkfSlam::Process(const common::SensorStep& step) {
   }
   flagged_observations_ += std::count(moving.begin(), moving.end(), true);
 
-  // Correction with the map landmarks that stood still.
+  // Correction with the map landmarks that stood still. Where landmarks creep (the share of the
+  // observations flagged by the drift or the velocity test so far, with kCreepSharePriorObservations
+  // unflagged ones as a prior, has reached ela_young_creep_share), a newly mapped landmark corrects
+  // only itself for its first ela_young_sightings sightings: a creeper that has not yet stood out
+  // does not drag the pose.
+  const bool landmarks_creep =
+      static_cast<double>(creep_flags_) >=
+      filter_.ela_young_creep_share * static_cast<double>(matched_observations_ + kCreepSharePriorObservations);
   for (std::size_t i = 0; i < matches.size(); ++i) {
     if (moving[i]) continue;
     const auto [d, s] = matches[i];
@@ -418,7 +436,9 @@ void EkfSlam::Process(const common::SensorStep& step) {
     slot.last_seen_step = step_;
     slot.misses = 0;
     if (!slot.moving) {
-      JosephUpdate(&x_, &p_, s, Eigen::Vector2d(detections[d].range_m, detections[d].bearing_rad), r_);
+      const bool young = ela_ && landmarks_creep && slot.corrections < filter_.ela_young_sightings;
+      JosephUpdate(&x_, &p_, s, Eigen::Vector2d(detections[d].range_m, detections[d].bearing_rad), r_, young);
+      ++slot.corrections;
     }
   }
 

@@ -106,9 +106,11 @@ class EkfSlam : public SlamFilter {
   static void MeasureJacobians(const Eigen::Vector3d& robot, const Eigen::Vector2d& m, Eigen::Matrix<double, 2, 3>* h_r,
                                Eigen::Matrix2d* h_m);
   // One Joseph-form update of (x, p) with the measurement z of the landmark in slot (step 4);
-  // returns false when S is not positive definite.
+  // returns false when S is not positive definite. With landmark_only the gain is kept on the
+  // landmark's own rows (zero elsewhere): the pose and the other landmarks, means and covariance,
+  // stay as they were, and the Joseph form keeps p the covariance of the estimate.
   static bool JosephUpdate(Eigen::VectorXd* x, Eigen::MatrixXd* p, int slot, const Eigen::Vector2d& z,
-                           const Eigen::Matrix2d& r);
+                           const Eigen::Matrix2d& r, bool landmark_only = false);
 
  private:
   struct Slot {
@@ -120,6 +122,7 @@ class EkfSlam : public SlamFilter {
     int misses = 0;
     bool moving = false;     // on probation (ekf_ela, step 6)
     int stay_frames = 0;     // frames on probation within its area
+    int corrections = 0;     // sightings used for correction since it entered the map
     int outside_frames = 0;  // a map landmark's sightings in a row outside its area
     // Since it was put on probation: the first from that frame's corrected pose, the later ones
     // from each frame's predicted pose.
@@ -186,6 +189,7 @@ class EkfSlam : public SlamFilter {
   std::uint32_t next_track_id_ = 1;
   std::int64_t matched_observations_ = 0;
   std::int64_t flagged_observations_ = 0;
+  std::int64_t creep_flags_ = 0;  // flags by the drift or the velocity test
 };
 
 // The ekf (ela = false) or ekf_ela (ela = true) filter for robot robot_id.

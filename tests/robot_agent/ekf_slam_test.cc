@@ -124,6 +124,24 @@ TEST(EkfSlamTest, JosephUpdateKeepsCovarianceSymmetricPositiveDefinite) {
           << p;
       EXPECT_LE(p.trace(), trace_before * (1.0 + 1e-9));
       ASSERT_TRUE(x.allFinite());
+      // The landmark-only update: the rest of the state and its covariance stay as they were.
+      const int other = rng.UniformInt(0, landmarks - 1), j = 3 + 2 * other;
+      const Eigen::VectorXd x_before = x;
+      const Eigen::MatrixXd p_before = p;
+      z = EkfSlam::Measure(x.head<3>(), x.segment<2>(j)) +
+          Eigen::Vector2d(rng.Normal(0.0, 0.05), rng.Normal(0.0, 0.02));
+      ASSERT_TRUE(EkfSlam::JosephUpdate(&x, &p, other, z, r, /*landmark_only=*/true));
+      ASSERT_TRUE(common::IsSymmetricPositiveDefinite<Eigen::Dynamic>(p, 1e-12));
+      const double landmark_trace_before = p_before.block(j, j, 2, 2).trace();
+      EXPECT_LE(p.block(j, j, 2, 2).trace(), landmark_trace_before * (1.0 + 1e-9));
+      for (int row = 0; row < n; ++row) {
+        if (row == j || row == j + 1) continue;
+        EXPECT_EQ(x(row), x_before(row));
+        for (int col = 0; col < n; ++col) {
+          if (col == j || col == j + 1) continue;
+          EXPECT_NEAR(p(row, col), p_before(row, col), 1e-12 * (1.0 + p_before.norm()));
+        }
+      }
     }
   }
 }

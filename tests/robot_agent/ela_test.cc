@@ -315,6 +315,28 @@ TEST(ElaTest, DriftTestTakesACreepingMapLandmarkOut) {
   EXPECT_LT(error_on, 0.3);
 }
 
+// Where landmarks move (ela_young_creep_share = 0: from the start), the landmarks, all new, correct
+// only themselves for their first ela_young_sightings sightings: the pose's covariance is that of
+// odometry alone (as with landmarks that never correct it) until their next sighting corrects it.
+TEST(ElaTest, YoungLandmarksDoNotCorrectThePoseWhereLandmarksMove) {
+  auto pose_traces = [](int young) {
+    common::ScenarioOptions o = JumperScenario();
+    o.filter.ela_young_sightings = young;
+    o.filter.ela_young_creep_share = 0.0;
+    EkfSlam ekf(o, "r1", /*ela=*/true);
+    std::vector<double> traces;
+    RunJumper(&ekf, JumpThenCreep(0.0, 0.0),
+              [&](int, EkfSlam& f) { traces.push_back(f.Covariance().topLeftCorner<3, 3>().trace()); });
+    return traces;
+  };
+  const std::vector<double> off = pose_traces(0), young = pose_traces(4), never = pose_traces(1000);
+  // Step k is traces[k - 1]; the first sighting (step 1) starts the landmarks, 2..5 are young.
+  for (int k = 1; k <= 5; ++k) EXPECT_NEAR(young[k - 1], never[k - 1], 1e-12) << "step " << k;
+  for (int k = 2; k <= 5; ++k) EXPECT_LT(off[k - 1], never[k - 1]) << "step " << k;
+  EXPECT_LT(young[5], never[5]) << "step 6 corrects the pose";
+  EXPECT_LT(young.back(), 0.5 * never.back());
+}
+
 // A one-frame spike (landmark 0 seen 0.25 m off at step 30 only: outside its area, within an
 // association gate widened to chi2_2(0.999999) so that the ELA, not the association, judges it):
 // with ela_outside_frames_to_move = 2 the landmark stays in the map with its information (the
