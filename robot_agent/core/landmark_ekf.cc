@@ -11,6 +11,21 @@
 namespace mrslam::robot_agent {
 namespace {
 
+// One vector of kW lanes built from kW scalars, each read where it lies: a vector built from
+// scalar loads, not from scalar stores to memory read back as one vector, which would stall on
+// store forwarding.
+template <typename T>
+MRSLAM_LANE_INLINE T LoadLanes(const double* const* at, int offset) {
+  if constexpr (sizeof(T) == 8 * sizeof(double)) {
+    return T{at[0][offset], at[1][offset], at[2][offset], at[3][offset],
+             at[4][offset], at[5][offset], at[6][offset], at[7][offset]};
+  } else if constexpr (sizeof(T) == 4 * sizeof(double)) {
+    return T{at[0][offset], at[1][offset], at[2][offset], at[3][offset]};
+  } else {
+    return T{at[0][offset], at[1][offset]};
+  }
+}
+
 // The update kernel over n queued updates, kW at a time: each lane's state is loaded from its
 // block, updated, and stored back; lanes beyond n repeat the last update and are not stored. The
 // state fields of the blocks kAhead updates on are requested in advance: the blocks of many
@@ -25,15 +40,18 @@ MRSLAM_LANE_INLINE void UpdateTargets(LandmarkBlock<D>* const* blocks, const int
     for (int l = 0; l < kW && k + kAhead + l < n; ++l) {
       for (int f = 0; f < kState; ++f) __builtin_prefetch(&blocks[k + kAhead + l]->field[f][0]);
     }
-    T state[kState], pose_z[5];
+    double* at[kW];  // lane l's first field; field f lies f * kLanes further on
     for (int l = 0; l < kW; ++l) {
       const int j = std::min(k + l, n - 1);
-      for (int f = 0; f < kState; ++f) state[f][l] = blocks[j]->field[f][lanes[j]];
+      at[l] = &blocks[j]->field[0][lanes[j]];
     }
+    T state[kState], pose_z[5];
+    for (int f = 0; f < kState; ++f) state[f] = LoadLanes<T>(at, f * kLanes);
     for (int i = 0; i < 5; ++i) std::memcpy(&pose_z[i], in[i] + k, sizeof(T));
     EkfUpdate<T, D>(state, state + D, pose_z[0], pose_z[1], pose_z[2], pose_z[3], pose_z[4], var_r, var_b);
-    for (int l = 0; l < kW && k + l < n; ++l) {
-      for (int f = 0; f < kState; ++f) blocks[k + l]->field[f][lanes[k + l]] = state[f][l];
+    const int stored = std::min(kW, n - k);
+    for (int l = 0; l < stored; ++l) {
+      for (int f = 0; f < kState; ++f) at[l][f * kLanes] = state[f][l];
     }
   }
 }
@@ -50,9 +68,20 @@ __attribute__((target("avx2"))) void UpdateTargetsAvx2(LandmarkBlock<D>* const* 
                                                        const double* const* in, int n, double var_r, double var_b) {
   UpdateTargets<Double4, D>(blocks, lanes, in, n, var_r, var_b);
 }
-bool HasAvx2() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
+template <int D>
+__attribute__((target("avx512f"))) void UpdateTargetsAvx512(LandmarkBlock<D>* const* blocks, const int* lanes,
+                                                            const double* const* in, int n, double var_r,
+                                                            double var_b) {
+  UpdateTargets<Double8, D>(blocks, lanes, in, n, var_r, var_b);
+}
+
+// The widest vector unit of this CPU, found once.
+enum class Simd { kSse2, kAvx2, kAvx512 };
+Simd Widest() {
+  static const Simd widest = __builtin_cpu_supports("avx512f") ? Simd::kAvx512
+                             : __builtin_cpu_supports("avx2")  ? Simd::kAvx2
+                                                               : Simd::kSse2;
+  return widest;
 }
 #endif
 
@@ -169,6 +198,11 @@ template <int D>
 __attribute__((target("avx2"))) void PredictLanesAvx2(LandmarkBlock<D>* block, int count, double dt, const double* q) {
   PredictLanes<Double4, D>(block, count, dt, q);
 }
+template <int D>
+__attribute__((target("avx512f"))) void PredictLanesAvx512(LandmarkBlock<D>* block, int count, double dt,
+                                                           const double* q) {
+  PredictLanes<Double8, D>(block, count, dt, q);
+}
 #endif
 
 }  // namespace
@@ -176,20 +210,22 @@ __attribute__((target("avx2"))) void PredictLanesAvx2(LandmarkBlock<D>* block, i
 template <int D>
 void PredictBlock(LandmarkBlock<D>* block, int count, double dt, const double* q) {
 #if defined(__x86_64__)
-  if (HasAvx2()) {
-    PredictLanesAvx2<D>(block, count, dt, q);
-  } else {
-    PredictLanesSse2<D>(block, count, dt, q);
+  switch (Widest()) {
+    case Simd::kAvx512:
+      return PredictLanesAvx512<D>(block, count, dt, q);
+    case Simd::kAvx2:
+      return PredictLanesAvx2<D>(block, count, dt, q);
+    case Simd::kSse2:
+      break;
   }
-#else
-  PredictLanesSse2<D>(block, count, dt, q);
 #endif
+  PredictLanesSse2<D>(block, count, dt, q);
 }
 
 namespace {
 
 // GateBlock's kernel, kW lanes at a time (count rounded up to kW: lanes are allocated in blocks
-// of kLanes, a multiple of 4).
+// of kLanes, a multiple of 8).
 template <typename T, int D>
 MRSLAM_LANE_INLINE void GateLanes(const LandmarkBlock<D>& block, int count, const common::Pose2& pose,
                                   const double* sigma, double z_r, double z_b, double var_r, double var_b,
@@ -245,6 +281,13 @@ __attribute__((target("avx2"))) void GateLanesAvx2(const LandmarkBlock<D>& block
                                                    double var_b, bool euclidean, double* d2) {
   GateLanes<Double4, D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
 }
+template <int D>
+__attribute__((target("avx512f"))) void GateLanesAvx512(const LandmarkBlock<D>& block, int count,
+                                                        const common::Pose2& pose, const double* sigma, double z_r,
+                                                        double z_b, double var_r, double var_b, bool euclidean,
+                                                        double* d2) {
+  GateLanes<Double8, D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
+}
 #endif
 
 }  // namespace
@@ -255,7 +298,10 @@ void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& po
   const double sigma[6] = {pose_cov(0, 0), pose_cov(0, 1), pose_cov(1, 1),
                            pose_cov(0, 2), pose_cov(1, 2), pose_cov(2, 2)};
 #if defined(__x86_64__)
-  if (HasAvx2()) {
+  const Simd simd = Widest();
+  if (simd == Simd::kAvx512) {
+    GateLanesAvx512<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
+  } else if (simd == Simd::kAvx2) {
     GateLanesAvx2<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
   } else {
     GateLanesSse2<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
@@ -278,18 +324,24 @@ template <int D>
 void UpdateBatch<D>::Run() {
   const int n = size_;
   if (n == 0) return;
-  // Input lanes up to a multiple of 4 repeat the last update (the kernels do not store them).
-  const int padded = (n + 3) / 4 * 4;
+  // Input lanes up to a multiple of 8 repeat the last update (the kernels do not store them).
+  const int padded = (n + 7) / 8 * 8;
   for (int k = n; k < padded; ++k) {
     for (int i = 0; i < kInputs; ++i) Input(i, k) = Input(i, n - 1);
   }
   const double* in[kInputs];
   for (int i = 0; i < kInputs; ++i) in[i] = &Input(i, 0);
 #if defined(__x86_64__)
-  if (HasAvx2()) {
-    UpdateTargetsAvx2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
-  } else {
-    UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
+  switch (Widest()) {
+    case Simd::kAvx512:
+      UpdateTargetsAvx512<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
+      break;
+    case Simd::kAvx2:
+      UpdateTargetsAvx2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
+      break;
+    case Simd::kSse2:
+      UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
+      break;
   }
 #else
   UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);

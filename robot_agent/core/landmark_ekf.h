@@ -29,8 +29,9 @@
 //   H_x = d(r, b)/d(xr, yr, phi) = [-H_m | (0, -1)^T]
 //
 // Storage is structure-of-arrays: a LandmarkBlock holds kLanes landmarks field by field, so
-// the kernels below run two landmarks per SSE2 instruction. The maths is written once, generic
-// over the lane type T (double for one landmark, Double2 for two), so that the tests check the
+// the kernels below run two, four or eight landmarks per instruction (SSE2, AVX2 or AVX-512F,
+// the widest the CPU has, chosen at run time). The maths is written once, generic over the lane
+// type T (double for one landmark, Double2/4/8 for more), so that the tests check the
 // scalar instantiation against Eigen and numeric differences and the filter runs the same code.
 namespace mrslam::robot_agent {
 
@@ -75,6 +76,18 @@ MRSLAM_LANE_INLINE Double4 Sqrt(Double4 x) {  // two SSE2 square roots (no AVX i
 MRSLAM_LANE_INLINE Double4 Abs(Double4 x) { return Select(x < 0.0, -x, x); }
 MRSLAM_LANE_INLINE Double4 Max(Double4 a, Double4 b) { return Select(a > b, a, b); }
 MRSLAM_LANE_INLINE Double4 Min(Double4 a, Double4 b) { return Select(a < b, a, b); }
+// Eight doubles in one AVX-512 register, likewise only inside functions compiled for AVX-512F.
+using Double8 = double __attribute__((vector_size(64)));
+using Mask8 = long __attribute__((vector_size(64)));  // NOLINT(runtime/int): the mask type
+MRSLAM_LANE_INLINE Double8 Select(Mask8 c, Double8 a, Double8 b) { return c ? a : b; }
+MRSLAM_LANE_INLINE Double8 Sqrt(Double8 x) {  // four SSE2 square roots, as for Double4
+  const Double2 a = _mm_sqrt_pd(Double2{x[0], x[1]}), b = _mm_sqrt_pd(Double2{x[2], x[3]});
+  const Double2 c = _mm_sqrt_pd(Double2{x[4], x[5]}), d = _mm_sqrt_pd(Double2{x[6], x[7]});
+  return Double8{a[0], a[1], b[0], b[1], c[0], c[1], d[0], d[1]};
+}
+MRSLAM_LANE_INLINE Double8 Abs(Double8 x) { return Select(x < 0.0, -x, x); }
+MRSLAM_LANE_INLINE Double8 Max(Double8 a, Double8 b) { return Select(a > b, a, b); }
+MRSLAM_LANE_INLINE Double8 Min(Double8 a, Double8 b) { return Select(a < b, a, b); }
 #endif
 template <typename T>
 T Splat(double x) {
@@ -288,7 +301,7 @@ struct LandmarkBlock {
   void CopyLane(int lane, LandmarkBlock* to, int to_lane) const;
 };
 
-// Predicts the first `count` lanes of a block over one step (EkfPredict, two lanes at a time).
+// Predicts the first `count` lanes of a block over one step (EkfPredict, several lanes at a time).
 template <int D>
 void PredictBlock(LandmarkBlock<D>* block, int count, double dt, const double* q);
 
@@ -302,7 +315,7 @@ void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& po
                double z_r, double z_b, double var_r, double var_b, bool euclidean, double* d2);
 
 // A batch of landmark EKF updates across particles: queues each (block, lane, pose, z), then
-// runs EkfUpdate four lanes at a time (two without AVX2), loading each lane's state from its
+// runs EkfUpdate eight, four or two lanes at a time (AVX-512F, AVX2, SSE2), loading each lane's state from its
 // block into a vector register and storing the result straight back. The filter queues every
 // update of a step here; the blocks must stay alive and not move until Run. A lane may be queued
 // at most once per Run. Add runs the batch by itself every kFlushSize updates, which keeps the
@@ -317,7 +330,7 @@ class UpdateBatch {
 
  private:
   static constexpr int kInputs = 5;        // xr, yr, phi, z_r, z_b
-  static constexpr int kFlushSize = 1024;  // a multiple of 4: padding lanes fit in the stride
+  static constexpr int kFlushSize = 1024;  // a multiple of 8: padding lanes fit in the stride
   // Rows of kFlushSize values, one cache line apart beyond a multiple of 4 KiB so that the rows
   // do not all fall into one L1 set.
   static constexpr int kRowStride = kFlushSize + 8;
