@@ -37,20 +37,28 @@ MRSLAM_LANE_INLINE void UpdateTargets(LandmarkBlock<D>* const* blocks, const int
   constexpr int kState = D + TriangleSize(D);
   constexpr int kAhead = 16;
   for (int k = 0; k < n; k += kW) {
-    for (int l = 0; l < kW && k + kAhead + l < n; ++l) {
+#pragma GCC unroll 16
+    for (int l = 0; l < kW; ++l) {
+      if (k + kAhead + l >= n) break;
+#pragma GCC unroll 16
       for (int f = 0; f < kState; ++f) __builtin_prefetch(&blocks[k + kAhead + l]->field[f][0]);
     }
     double* at[kW];  // lane l's first field; field f lies f * kLanes further on
+#pragma GCC unroll 16
     for (int l = 0; l < kW; ++l) {
       const int j = std::min(k + l, n - 1);
       at[l] = &blocks[j]->field[0][lanes[j]];
     }
     T state[kState], pose_z[5];
+#pragma GCC unroll 16
     for (int f = 0; f < kState; ++f) state[f] = LoadLanes<T>(at, f * kLanes);
+#pragma GCC unroll 16
     for (int i = 0; i < 5; ++i) std::memcpy(&pose_z[i], in[i] + k, sizeof(T));
     EkfUpdate<T, D>(state, state + D, pose_z[0], pose_z[1], pose_z[2], pose_z[3], pose_z[4], var_r, var_b);
-    const int stored = std::min(kW, n - k);
-    for (int l = 0; l < stored; ++l) {
+#pragma GCC unroll 16
+    for (int l = 0; l < kW; ++l) {
+      if (k + l >= n) break;
+#pragma GCC unroll 16
       for (int f = 0; f < kState; ++f) at[l][f * kLanes] = state[f][l];
     }
   }
@@ -175,7 +183,9 @@ MRSLAM_LANE_INLINE void PredictLanes(LandmarkBlock<D>* block, int count, double 
   constexpr int kTri = TriangleSize(D);
   for (int l = 0; l < count; l += kW) {
     T mean[D], cov[kTri];
+#pragma GCC unroll 16
     for (int i = 0; i < D; ++i) std::memcpy(&mean[i], &block->field[i][l], sizeof(T));
+#pragma GCC unroll 16
     for (int i = 0; i < kTri; ++i) std::memcpy(&cov[i], &block->field[D + i][l], sizeof(T));
     T v = Splat<T>(0.0), w = Splat<T>(0.0);
     if constexpr (D == 3) {
@@ -183,7 +193,9 @@ MRSLAM_LANE_INLINE void PredictLanes(LandmarkBlock<D>* block, int count, double 
       std::memcpy(&w, &block->field[LandmarkBlock<D>::kParamW][l], sizeof(T));
     }
     EkfPredict<T, D>(mean, cov, v, w, dt, q);
+#pragma GCC unroll 16
     for (int i = 0; i < D; ++i) std::memcpy(&block->field[i][l], &mean[i], sizeof(T));
+#pragma GCC unroll 16
     for (int i = 0; i < kTri; ++i) std::memcpy(&block->field[D + i][l], &cov[i], sizeof(T));
   }
 }

