@@ -26,7 +26,8 @@ except ImportError as error:  # pragma: no cover - depends on the machine
     sys.exit(EXIT_NO_MATPLOTLIB)
 
 METRICS = [("landmark_rmse_m", "landmark RMSE (m)"), ("robot_rmse_m", "robot RMSE (m)"),
-           ("static_completeness", "static completeness")]
+           ("static_completeness", "static completeness"),
+           ("static_only_completeness", "static completeness, static-only assignment")]
 
 
 def load(path):

@@ -13,7 +13,9 @@
 //     over the frames at which the map is not empty;
 //   robot RMSE: sqrt(mean_k |p_est(k) - p_true(k)|^2);
 //   static completeness: of the static true landmarks that came within the sensor's reach of
-//     the robot at some frame, the share that stands in its map at the end (MatchedTruth).
+//     the robot at some frame, the share that stands in its map at the end (MatchedTruth);
+//   static-only completeness: the same with the map's points assigned among the static true
+//     landmarks only, so that a mover passing a static landmark's map point cannot take it.
 //
 //   mrslam_grid --scenario FILE --out DIR [--runs N] [--frames K] [--threads T]
 //               [--particles P] [--filters ekf,ekf_ela,fastslam] [--set k=v]... [--multi-process]
@@ -71,7 +73,8 @@ struct Row {
   double landmark_rmse_m = 0.0;
   double robot_rmse_m = 0.0;
   double static_completeness = 0.0;
-  std::vector<double> robot_landmark_rmse_m, robot_rmse_per_robot_m, robot_completeness;
+  double static_only_completeness = 0.0;
+  std::vector<double> robot_landmark_rmse_m, robot_rmse_per_robot_m, robot_completeness, robot_static_only_completeness;
   double moving_flag_share = 0.0;  // reported moving landmarks / reported landmarks, over frames
   double mapped_at_end = 0.0;      // landmarks in the map at the end, mean over robots
   double seconds = 0.0;
@@ -144,23 +147,34 @@ class RunScorer {
 
   Row Finish(double seconds) const {
     Row row;
+    std::vector<evaluator::TruePoint> static_landmarks;
+    for (std::size_t l = 0; l < true_landmarks_.size(); ++l) {
+      if (is_static_[l]) static_landmarks.push_back(true_landmarks_[l]);
+    }
     for (std::size_t i = 0; i < n_; ++i) {
       row.robot_landmark_rmse_m.push_back(Mean(frame_rmse_[i]));
       row.robot_rmse_per_robot_m.push_back(std::sqrt(Mean(position_sq_[i])));
       const std::vector<int> matched =
           evaluator::MatchedTruth(last_map_[i], true_landmarks_, options_.robots[i].frame_in_world);
-      int reach = 0, kept = 0;
-      for (std::size_t l = 0; l < true_landmarks_.size(); ++l) {
-        if (!is_static_[l] || !reached_[i][l]) continue;
+      const std::vector<int> matched_static =
+          evaluator::MatchedTruth(last_map_[i], static_landmarks, options_.robots[i].frame_in_world);
+      int reach = 0, kept = 0, kept_static = 0;
+      for (std::size_t l = 0, s = 0; l < true_landmarks_.size(); ++l) {
+        if (!is_static_[l]) continue;
+        const int static_index = static_cast<int>(s++);
+        if (!reached_[i][l]) continue;
         ++reach;
         if (std::binary_search(matched.begin(), matched.end(), static_cast<int>(l))) ++kept;
+        if (std::binary_search(matched_static.begin(), matched_static.end(), static_index)) ++kept_static;
       }
       row.robot_completeness.push_back(reach > 0 ? static_cast<double>(kept) / reach : std::nan(""));
+      row.robot_static_only_completeness.push_back(reach > 0 ? static_cast<double>(kept_static) / reach : std::nan(""));
       row.mapped_at_end += static_cast<double>(last_map_[i].size()) / static_cast<double>(n_);
     }
     row.landmark_rmse_m = Mean(row.robot_landmark_rmse_m);
     row.robot_rmse_m = Mean(row.robot_rmse_per_robot_m);
     row.static_completeness = Mean(row.robot_completeness);
+    row.static_only_completeness = Mean(row.robot_static_only_completeness);
     row.moving_flag_share = all_reported_ > 0.0 ? moving_reported_ / all_reported_ : 0.0;
     row.seconds = seconds;
     return row;
@@ -375,7 +389,10 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
   };
   const Metric metrics[] = {{"Total landmark RMSE (m), eqs. 17-18", &Row::landmark_rmse_m},
                             {"Robot position RMSE (m), mean over robots", &Row::robot_rmse_m},
-                            {"Static-landmark completeness at the end", &Row::static_completeness}};
+                            {"Static-landmark completeness at the end", &Row::static_completeness},
+                            {"Static-landmark completeness at the end, map points assigned among the static "
+                             "landmarks only",
+                             &Row::static_only_completeness}};
   for (const auto& m : metrics) {
     table(std::string(m.title) + ": " + filter_names,
           [&](int d, int sp) { return per_filter([&](const std::string& f) { return mean_of(f, d, sp, m.field); }); });
@@ -524,7 +541,7 @@ int Main(int argc, char** argv) {
   const std::string csv_path = out_dir + "/grid.csv";
   std::ofstream csv(csv_path);
   if (!csv) throw std::runtime_error("cannot write " + csv_path);
-  csv << "filter,dynamism,speed_mps,run,landmark_rmse_m,robot_rmse_m,static_completeness";
+  csv << "filter,dynamism,speed_mps,run,landmark_rmse_m,robot_rmse_m,static_completeness,static_only_completeness";
   for (const auto& r : options.robots) csv << "," << r.id << "_landmark_rmse_m";
   for (const auto& r : options.robots) csv << "," << r.id << "_robot_rmse_m";
   for (const auto& r : options.robots) csv << "," << r.id << "_static_completeness";
@@ -538,7 +555,7 @@ int Main(int argc, char** argv) {
     const Row& r = rows[j];
     csv << jobs[j].filter << "," << num(kDynamism[jobs[j].dynamism_index]) << "," << num(kSpeeds[jobs[j].speed_index])
         << "," << jobs[j].run << "," << num(r.landmark_rmse_m) << "," << num(r.robot_rmse_m) << ","
-        << num(r.static_completeness);
+        << num(r.static_completeness) << "," << num(r.static_only_completeness);
     for (const double v : r.robot_landmark_rmse_m) csv << "," << num(v);
     for (const double v : r.robot_rmse_per_robot_m) csv << "," << num(v);
     for (const double v : r.robot_completeness) csv << "," << num(v);
