@@ -532,6 +532,7 @@ int Main(int argc, char** argv) {
     }
   };
   std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(std::min(threads, num_jobs)));
   for (int t = 0; t < std::min(threads, num_jobs); ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
   std::fprintf(stderr, "\n");
