@@ -47,7 +47,9 @@
 //    transform's covariance (map_fusion.h) and merges them into its filter.
 //    Transitive frames: from a snapshot of j holding T(G_j <- G_k), the receiver composes
 //    T(G_i <- G_k) = T(G_i <- G_j) T(G_j <- G_k) for every k it did not know; a chained
-//    transform is later refined (SCI) by newer chains or replaced in effect by meeting k.
+//    transform is later refined (SCI) by newer chains or replaced in effect by meeting k. The
+//    transforms also go on their own (a snapshot without landmarks) at every encounter that is
+//    not a rendezvous, every kShareFramesSteps of a long encounter, and without map merging.
 //  * Validation. Every message is checked before use: known other sender, addressed here, a step
 //    not after the current one and not older than the last applied of its kind from that sender,
 //    finite numbers, symmetric positive-definite covariances, a snapshot within the size bound
@@ -63,9 +65,10 @@
 namespace mrslam::robot_agent {
 namespace {
 
-constexpr int kEncounterRefineSteps = 10;   // DESIGN.md: an encounter is scored after 10 steps
-constexpr std::size_t kMaxHistory = 64;     // bound of each per-peer detection history
-constexpr double kCovarianceFloor = 1e-10;  // added to a sent pose covariance (1 particle: 0)
+constexpr int kEncounterRefineSteps = 10;        // DESIGN.md: an encounter is scored after 10 steps
+constexpr std::uint32_t kShareFramesSteps = 10;  // a long encounter passes on the frames known this often
+constexpr std::size_t kMaxHistory = 64;          // bound of each per-peer detection history
+constexpr double kCovarianceFloor = 1e-10;       // added to a sent pose covariance (1 particle: 0)
 
 bool Finite(const common::Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.heading); }
 
@@ -298,7 +301,11 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
       rendezvous_.push_back({peer_id, step, {}, Eigen::Matrix3d::Identity()});
       peer.snapshot_due = scenario_.cooperation.merge_maps;
     }
+    // Every encounter passes on the frames known (chaining needs no map): at a rendezvous with
+    // the map, at any other encounter (or without map merging) on their own.
+    peer.transforms_due = !peer.snapshot_due;
   }
+  if (continues && (step - peer.encounter_first) % kShareFramesSteps == 0) peer.transforms_due = true;
   peer.encounter_last = step;
   ++peer.encounter_pairs;
   const bool refines = Refining(peer, step);
@@ -473,10 +480,13 @@ PeerOutbox Cooperation::AfterStep(const common::LidarScan& scan, const FilterEst
     for (auto it = peer.own_detections.begin(); it != peer.own_detections.end();) {
       it = static_cast<std::int64_t>(it->first) <= oldest ? peer.own_detections.erase(it) : std::next(it);
     }
-    if (peer.snapshot_due) {
-      peer.snapshot_due = false;
-      out.maps.push_back(MakeSnapshot(id, estimate));
+    if (peer.snapshot_due || (peer.transforms_due && peer.transform)) {
+      MapSnapshot m = MakeSnapshot(id, estimate);
+      if (!peer.snapshot_due) m.landmarks.clear();
+      if (peer.snapshot_due || !m.known_transforms.empty()) out.maps.push_back(std::move(m));
     }
+    peer.snapshot_due = false;
+    peer.transforms_due = false;
   }
   return out;
 }

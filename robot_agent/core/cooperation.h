@@ -71,7 +71,8 @@ class Cooperation {
     int encounter_pairs = 0;
     int event_index = -1;  // into rendezvous_ while the encounter refines its event
     std::optional<std::uint32_t> last_rendezvous_step;
-    bool snapshot_due = false;
+    bool snapshot_due = false;    // the map and the transforms go to the peer after this step
+    bool transforms_due = false;  // the transforms only (an encounter that is not a rendezvous)
     // The last step applied per message kind (older ones are stale).
     std::optional<std::uint32_t> last_measurement_step, last_snapshot_step, last_notice_step;
   };

@@ -680,6 +680,28 @@ TEST(Cooperation, FramesChainThroughPeers) {
   EXPECT_TRUE(found);
 }
 
+TEST(Cooperation, FramesSpreadDuringALongEncounter) {
+  // r1 and r2 stay in contact from step 14 on (one encounter, one rendezvous); r2 meets r3 at
+  // 30. Every 10 steps of the encounter r2 passes its transforms on, without its map.
+  Sim sim(
+      Scenario(3),
+      [](std::uint32_t k, int i, int j) {
+        if (i == 0 && j == 1) return k >= 14;
+        if (i == 1 && j == 2) return k >= 30 && k <= 31;
+        return false;
+      },
+      11);
+  sim.Run(30);
+  EXPECT_EQ(sim.agent(0).frames_known(), std::vector<std::string>{"r2"});
+  sim.Run(15);
+  ASSERT_EQ(sim.agent(0).rendezvous().size(), 1u);
+  EXPECT_EQ(sim.agent(0).frames_known(), (std::vector<std::string>{"r2", "r3"}));
+  const std::optional<FrameTransform> t13 = Find(sim.agent(0).known_transforms(), "r3");
+  ASSERT_TRUE(t13.has_value());
+  EXPECT_LT(Nees(t13->t_self_peer, sim.TrueTransform(0, 2), t13->covariance), 16.3);
+  EXPECT_EQ(sim.filter(0).merges, 1);  // the rendezvous' snapshot only
+}
+
 TEST(Cooperation, CooperativeLocalizationUsesDetectionsAfterTheRefinement) {
   common::ScenarioOptions s = Scenario(2);
   s.cooperation.cooperative_localization = true;
