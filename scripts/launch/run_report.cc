@@ -75,8 +75,8 @@ std::string Render(const std::vector<std::string>& header, const std::vector<std
 }  // namespace
 
 const std::vector<std::string>& AggregatedMetrics() {
-  static const std::vector<std::string> metrics = {"position_rmse_m", "heading_rmse_deg", "landmark_rmse_m",
-                                                   "dead_reckoning_rmse_m", "map_completeness"};
+  static const std::vector<std::string> metrics = {"position_rmse_m",       "heading_rmse_deg", "landmark_rmse_m",
+                                                   "dead_reckoning_rmse_m", "map_completeness", "union_completeness"};
   return metrics;
 }
 

@@ -193,6 +193,8 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     ExpectFiniteAtLeast(r, "landmarks_mapped", 0.0, id);
     ExpectFiniteAtLeast(r, "map_completeness", 0.0, id);
     EXPECT_LE(r["map_completeness"].get<double>(), 1.0) << id;
+    ExpectFiniteAtLeast(r, "union_completeness", 0.0, id);
+    EXPECT_LE(r["union_completeness"].get<double>(), 1.0) << id;
     EXPECT_LT(r["position_rmse_m"].get<double>(), 20.0) << id;  // 12 steps of 0.65 m: a sanity bound
     EXPECT_LT(r["heading_rmse_deg"].get<double>(), 180.0) << id;
     ASSERT_TRUE(r.contains("frames_known") && r["frames_known"].is_array()) << id;
@@ -341,8 +343,8 @@ TEST(LauncherTest, SeedsRunInTurnAndAggregate) {
   ASSERT_NO_THROW(aggregate = nlohmann::json::parse(ReadFile(out + "/aggregate.json")));
   EXPECT_EQ(aggregate["seeds"], nlohmann::json({3, 4}));
   for (const std::string id : {"r1", "r2"}) {
-    for (const std::string metric :
-         {"position_rmse_m", "heading_rmse_deg", "landmark_rmse_m", "dead_reckoning_rmse_m", "map_completeness"}) {
+    for (const std::string metric : {"position_rmse_m", "heading_rmse_deg", "landmark_rmse_m", "dead_reckoning_rmse_m",
+                                     "map_completeness", "union_completeness"}) {
       const auto& m = aggregate["robots"][id][metric];
       ASSERT_TRUE(m["median"].is_number()) << id << " " << metric << ": " << m.dump();
       ASSERT_TRUE(m["p90"].is_number()) << id << " " << metric;

@@ -2,3 +2,8 @@
 mrslam_add_test(metrics_test
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/metrics_test.cc
   LIBS mrslam_metrics)
+
+# The run scorer (summary.json) on hand-made runs.
+mrslam_add_test(run_evaluator_test
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/run_evaluator_test.cc
+  LIBS mrslam_run_evaluator)

@@ -106,6 +106,20 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
   summary["wall_seconds"] = wall_seconds;
   summary["robots"] = nlohmann::json::object();
 
+  // Per robot, the true landmarks ever within its sensor reach (for the union completeness).
+  std::map<std::string, std::set<int>> reached;
+  for (const auto& [step, truth] : truth_) {
+    for (const auto& rt : truth.robots) {
+      for (const auto& l : truth.landmarks) {
+        const auto z = MeasureRangeBearing(rt.pose, l.pose.Translation());
+        if (z.range_m <= scenario_.sensors.lidar.max_range_m &&
+            std::abs(z.bearing_rad) <= scenario_.sensors.lidar.fov_rad / 2.0) {
+          reached[rt.id].insert(std::stoi(l.id));
+        }
+      }
+    }
+  }
+
   for (const auto& robot : scenario_.robots) {
     const std::string& id = robot.id;
     const Pose2 frame = FrameOf(truth0, id);
@@ -115,7 +129,8 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
     OpenOrThrow(tum_truth, out / "trajectories" / (id + "_truth.tum"));
 
     std::vector<double> pos_err, head_err, lm_err, dr_err, nees;
-    std::set<int> seen;  // true landmark ids ever within the robot's sensor reach
+    std::set<int> seen;    // true landmark ids ever within the robot's sensor reach
+    std::set<int> in_map;  // true landmark ids that stand in the map at the last scored step
     double completeness = 0.0;
     std::size_t mapped = 0;
     // Dead reckoning from the true initial pose in the robot's own frame.
@@ -155,7 +170,12 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
       lm_err.insert(lm_err.end(), errors.begin(), errors.end());
       const auto matched = MatchedTruth(est.landmarks, true_points, frame, cutoff_m);
       std::size_t matched_seen = 0;
-      for (const int j : matched) matched_seen += seen.count(true_points[static_cast<std::size_t>(j)].landmark_id);
+      in_map.clear();
+      for (const int j : matched) {
+        const int landmark_id = true_points[static_cast<std::size_t>(j)].landmark_id;
+        matched_seen += seen.count(landmark_id);
+        in_map.insert(landmark_id);
+      }
       completeness = seen.empty() ? 1.0 : static_cast<double>(matched_seen) / static_cast<double>(seen.size());
       mapped = est.landmarks.size();
 
@@ -193,6 +213,16 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
     r["mean_nees"] = nees.empty() ? 0.0 : nees_sum / static_cast<double>(nees.size());
     r["landmarks_mapped"] = mapped;
     r["map_completeness"] = completeness;
+    // Of the landmarks within the reach of this robot or of any robot whose frame it knows (over
+    // the whole run), the share in its map at the end.
+    std::set<int> union_reach = reached[id];
+    if (last != nullptr) {
+      for (const auto& peer : last->frames_known) union_reach.insert(reached[peer].begin(), reached[peer].end());
+    }
+    std::size_t union_mapped = 0;
+    for (const int l : union_reach) union_mapped += in_map.count(l);
+    r["union_completeness"] =
+        union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
     r["steps_scored"] = pos_err.size();
     r["frames_known"] = last != nullptr ? last->frames_known : std::vector<std::string>{};
     // A rendezvous is scored by the transform the robot holds at the end of the encounter:

@@ -1,0 +1,79 @@
+#include "world_sim/evaluator/run_evaluator.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "common/angles.h"
+
+namespace mrslam::evaluator {
+namespace {
+
+// Two robots 10 m apart, each with one landmark 1 m ahead of it and a 3 m lidar: r1 reaches
+// landmark 1 only, r2 landmark 2 only. Each maps its own landmark.
+class RunEvaluatorTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    scenario_.name = "run_evaluator_test";
+    scenario_.run.steps = 1;
+    scenario_.sensors.lidar.max_range_m = 3.0;
+    scenario_.sensors.lidar.fov_rad = 2.0 * common::kPi;
+    for (const auto& [id, frame] : {std::pair<std::string, common::Pose2>{"r1", {0.0, 0.0, 0.0}},
+                                    std::pair<std::string, common::Pose2>{"r2", {10.0, 0.0, 0.0}}}) {
+      common::RobotOptions r;
+      r.id = id;
+      r.frame_in_world = frame;
+      scenario_.robots.push_back(r);
+    }
+    out_dir_ = (std::filesystem::temp_directory_path() / ("mrslam-evaluator-" + std::to_string(getpid()))).string();
+  }
+  void TearDown() override { std::filesystem::remove_all(out_dir_); }
+
+  // Scores the run in which r1 knows the frames in r1_frames_known.
+  nlohmann::json Score(const std::vector<std::string>& r1_frames_known) const {
+    RunEvaluator evaluator(scenario_);
+    for (std::uint32_t step = 0; step <= 1; ++step) {
+      common::GroundTruth truth;
+      truth.stamp.step = step;
+      truth.robots = {{"r1", {0.0, 0.0, 0.0}, false}, {"r2", {10.0, 0.0, 0.0}, false}};
+      truth.landmarks = {{"1", {1.0, 0.0, 0.0}, false}, {"2", {11.0, 0.0, 0.0}, false}};
+      truth.frames = {{"r1", {0.0, 0.0, 0.0}}, {"r2", {10.0, 0.0, 0.0}}};
+      evaluator.AddTruth(truth);
+      RobotEstimate r1, r2;
+      r1.step = r2.step = step;
+      r1.landmarks = {{Eigen::Vector2d(1.0, 0.0), 1}};
+      r2.landmarks = {{Eigen::Vector2d(1.0, 0.0), 2}};  // in r2's own frame
+      r1.frames_known = r1_frames_known;
+      evaluator.AddEstimate("r1", r1);
+      evaluator.AddEstimate("r2", r2);
+      if (step > 0) {  // standing still
+        common::Odometry odometry;
+        odometry.stamp.step = step;
+        odometry.segments = {{0.0, 1.0, 0.0, 0.0}};
+        evaluator.AddOdometry("r1", odometry);
+        evaluator.AddOdometry("r2", odometry);
+      }
+    }
+    EXPECT_TRUE(evaluator.Complete()) << evaluator.Missing();
+    return evaluator.Write(out_dir_, 0.0);
+  }
+
+  common::ScenarioOptions scenario_;
+  std::string out_dir_;
+};
+
+TEST_F(RunEvaluatorTest, UnionCompletenessCountsTheLandmarksOfTheFramesKnown) {
+  const nlohmann::json alone = Score({});
+  EXPECT_DOUBLE_EQ(alone["robots"]["r1"]["map_completeness"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(alone["robots"]["r1"]["union_completeness"].get<double>(), 1.0);
+  // Knowing r2's frame, r1's map should also hold landmark 2, which only r2 reached.
+  const nlohmann::json knowing = Score({"r2"});
+  EXPECT_DOUBLE_EQ(knowing["robots"]["r1"]["map_completeness"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(knowing["robots"]["r1"]["union_completeness"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(knowing["robots"]["r2"]["union_completeness"].get<double>(), 1.0);
+}
+
+}  // namespace
+}  // namespace mrslam::evaluator
