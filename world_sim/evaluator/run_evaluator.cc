@@ -204,6 +204,7 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
     nlohmann::json r;
     r["position_rmse_m"] = Rmse(pos_err);
     std::vector<double> head_deg;
+    head_deg.reserve(head_err.size());
     for (const double e : head_err) head_deg.push_back(common::DegFromRad(e));
     r["heading_rmse_deg"] = Rmse(head_deg);
     r["landmark_rmse_m"] = Rmse(lm_err);
