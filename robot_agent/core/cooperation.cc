@@ -418,10 +418,10 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
   filter->MergeLandmarks(moved, scenario_.cooperation.map_fusion, scenario_.cooperation.match_gate_probability);
 }
 
-MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const FilterEstimate& estimate) const {
+MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const FilterEstimate& estimate, bool with_map) const {
   MapSnapshot m;
   m.header = {robot_id_, peer, estimate.step, estimate.time_s, 0};
-  m.landmarks = SnapshotLandmarks(estimate, scenario_.cooperation.max_snapshot_landmarks);
+  if (with_map) m.landmarks = SnapshotLandmarks(estimate, scenario_.cooperation.max_snapshot_landmarks);
   for (const auto& t : known_transforms()) {
     if (t.peer != peer) m.known_transforms.push_back(t);
   }
@@ -480,10 +480,10 @@ PeerOutbox Cooperation::AfterStep(const common::LidarScan& scan, const FilterEst
     for (auto it = peer.own_detections.begin(); it != peer.own_detections.end();) {
       it = static_cast<std::int64_t>(it->first) <= oldest ? peer.own_detections.erase(it) : std::next(it);
     }
-    if (peer.snapshot_due || (peer.transforms_due && peer.transform)) {
-      MapSnapshot m = MakeSnapshot(id, estimate);
-      if (!peer.snapshot_due) m.landmarks.clear();
-      if (peer.snapshot_due || !m.known_transforms.empty()) out.maps.push_back(std::move(m));
+    const bool with_map = peer.snapshot_due;
+    if (with_map || (peer.transforms_due && peer.transform)) {
+      MapSnapshot m = MakeSnapshot(id, estimate, with_map);
+      if (with_map || !m.known_transforms.empty()) out.maps.push_back(std::move(m));
     }
     peer.snapshot_due = false;
     peer.transforms_due = false;

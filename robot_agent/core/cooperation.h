@@ -95,7 +95,8 @@ class Cooperation {
   bool Refining(const PeerState& peer, std::uint32_t step) const;
   // Holds t as the transform to peer, estimated at step (and as the event's, while refining).
   void HoldTransform(PeerState* peer, const TransformEstimate& t, std::uint32_t step);
-  MapSnapshot MakeSnapshot(const std::string& peer, const FilterEstimate& estimate) const;
+  // The snapshot for peer: the transforms held (but the peer's own), and the map if with_map.
+  MapSnapshot MakeSnapshot(const std::string& peer, const FilterEstimate& estimate, bool with_map) const;
   void Reject() { ++rejected_; }
 
   common::ScenarioOptions scenario_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <utility>
 
 // The lane maths is always inlined into its kernels (see landmark_ekf.h): no vector argument
 // crosses a call, whatever -Wpsabi reports at the end of this file.
@@ -14,16 +15,9 @@ namespace {
 // One vector of kW lanes built from kW scalars, each read where it lies: a vector built from
 // scalar loads, not from scalar stores to memory read back as one vector, which would stall on
 // store forwarding.
-template <typename T>
-MRSLAM_LANE_INLINE T LoadLanes(const double* const* at, int offset) {
-  if constexpr (sizeof(T) == 8 * sizeof(double)) {
-    return T{at[0][offset], at[1][offset], at[2][offset], at[3][offset],
-             at[4][offset], at[5][offset], at[6][offset], at[7][offset]};
-  } else if constexpr (sizeof(T) == 4 * sizeof(double)) {
-    return T{at[0][offset], at[1][offset], at[2][offset], at[3][offset]};
-  } else {
-    return T{at[0][offset], at[1][offset]};
-  }
+template <typename T, std::size_t... L>
+MRSLAM_LANE_INLINE T LoadLanes(const double* const* at, int offset, std::index_sequence<L...> /*lanes*/) {
+  return T{at[L][offset]...};
 }
 
 // The update kernel over n queued updates, kW at a time: each lane's state is loaded from its
@@ -51,7 +45,7 @@ MRSLAM_LANE_INLINE void UpdateTargets(LandmarkBlock<D>* const* blocks, const int
     }
     T state[kState], pose_z[5];
 #pragma GCC unroll 16
-    for (int f = 0; f < kState; ++f) state[f] = LoadLanes<T>(at, f * kLanes);
+    for (int f = 0; f < kState; ++f) state[f] = LoadLanes<T>(at, f * kLanes, std::make_index_sequence<kW>{});
 #pragma GCC unroll 16
     for (int i = 0; i < 5; ++i) std::memcpy(&pose_z[i], in[i] + k, sizeof(T));
     EkfUpdate<T, D>(state, state + D, pose_z[0], pose_z[1], pose_z[2], pose_z[3], pose_z[4], var_r, var_b);
@@ -302,6 +296,23 @@ __attribute__((target("avx512f"))) void GateLanesAvx512(const LandmarkBlock<D>& 
 }
 #endif
 
+// GateLanes on the widest vector unit.
+template <int D>
+void GateLanesWidest(const LandmarkBlock<D>& block, int count, const common::Pose2& pose, const double* sigma,
+                     double z_r, double z_b, double var_r, double var_b, bool euclidean, double* d2) {
+#if defined(__x86_64__)
+  switch (Widest()) {
+    case Simd::kAvx512:
+      return GateLanesAvx512<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
+    case Simd::kAvx2:
+      return GateLanesAvx2<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
+    case Simd::kSse2:
+      break;
+  }
+#endif
+  GateLanesSse2<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
+}
+
 }  // namespace
 
 template <int D>
@@ -309,18 +320,7 @@ void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& po
                double z_r, double z_b, double var_r, double var_b, bool euclidean, double* d2) {
   const double sigma[6] = {pose_cov(0, 0), pose_cov(0, 1), pose_cov(1, 1),
                            pose_cov(0, 2), pose_cov(1, 2), pose_cov(2, 2)};
-#if defined(__x86_64__)
-  const Simd simd = Widest();
-  if (simd == Simd::kAvx512) {
-    GateLanesAvx512<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
-  } else if (simd == Simd::kAvx2) {
-    GateLanesAvx2<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
-  } else {
-    GateLanesSse2<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
-  }
-#else
-  GateLanesSse2<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
-#endif
+  GateLanesWidest<D>(block, count, pose, sigma, z_r, z_b, var_r, var_b, euclidean, d2);
   for (int l = count; l < kLanes; ++l) d2[l] = std::numeric_limits<double>::infinity();
 }
 
@@ -343,22 +343,18 @@ void UpdateBatch<D>::Run() {
   }
   const double* in[kInputs];
   for (int i = 0; i < kInputs; ++i) in[i] = &Input(i, 0);
+  size_ = 0;
 #if defined(__x86_64__)
   switch (Widest()) {
     case Simd::kAvx512:
-      UpdateTargetsAvx512<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
-      break;
+      return UpdateTargetsAvx512<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
     case Simd::kAvx2:
-      UpdateTargetsAvx2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
-      break;
+      return UpdateTargetsAvx2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
     case Simd::kSse2:
-      UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
       break;
   }
-#else
-  UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
 #endif
-  size_ = 0;
+  UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
 }
 
 #define MRSLAM_INSTANTIATE_EKF(D)                                                                                \

@@ -74,7 +74,7 @@ struct Row {
   double robot_rmse_m = 0.0;
   double static_completeness = 0.0;
   double static_only_completeness = 0.0;
-  std::vector<double> robot_landmark_rmse_m, robot_rmse_per_robot_m, robot_completeness, robot_static_only_completeness;
+  std::vector<double> robot_landmark_rmse_m, robot_rmse_per_robot_m, robot_completeness;
   double moving_flag_share = 0.0;  // reported moving landmarks / reported landmarks, over frames
   double mapped_at_end = 0.0;      // landmarks in the map at the end, mean over robots
   double seconds = 0.0;
@@ -151,6 +151,7 @@ class RunScorer {
     for (std::size_t l = 0; l < true_landmarks_.size(); ++l) {
       if (is_static_[l]) static_landmarks.push_back(true_landmarks_[l]);
     }
+    std::vector<double> static_only_completeness;  // per robot
     for (std::size_t i = 0; i < n_; ++i) {
       row.robot_landmark_rmse_m.push_back(Mean(frame_rmse_[i]));
       row.robot_rmse_per_robot_m.push_back(std::sqrt(Mean(position_sq_[i])));
@@ -168,13 +169,13 @@ class RunScorer {
         if (std::binary_search(matched_static.begin(), matched_static.end(), static_index)) ++kept_static;
       }
       row.robot_completeness.push_back(reach > 0 ? static_cast<double>(kept) / reach : std::nan(""));
-      row.robot_static_only_completeness.push_back(reach > 0 ? static_cast<double>(kept_static) / reach : std::nan(""));
+      static_only_completeness.push_back(reach > 0 ? static_cast<double>(kept_static) / reach : std::nan(""));
       row.mapped_at_end += static_cast<double>(last_map_[i].size()) / static_cast<double>(n_);
     }
     row.landmark_rmse_m = Mean(row.robot_landmark_rmse_m);
     row.robot_rmse_m = Mean(row.robot_rmse_per_robot_m);
     row.static_completeness = Mean(row.robot_completeness);
-    row.static_only_completeness = Mean(row.robot_static_only_completeness);
+    row.static_only_completeness = Mean(static_only_completeness);
     row.moving_flag_share = all_reported_ > 0.0 ? moving_reported_ / all_reported_ : 0.0;
     row.seconds = seconds;
     return row;

@@ -106,16 +106,18 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
   summary["wall_seconds"] = wall_seconds;
   summary["robots"] = nlohmann::json::object();
 
-  // Per robot, the true landmarks ever within its sensor reach (for the union completeness).
+  // Whether a landmark is within the lidar's reach of a robot (true poses).
+  const auto in_reach = [&](const Pose2& robot_pose, const common::EntityTruth& landmark) {
+    const auto z = MeasureRangeBearing(robot_pose, landmark.pose.Translation());
+    return z.range_m <= scenario_.sensors.lidar.max_range_m &&
+           std::abs(z.bearing_rad) <= scenario_.sensors.lidar.fov_rad / 2.0;
+  };
+  // Per robot, the true landmarks ever within its reach (for the union completeness).
   std::map<std::string, std::set<int>> reached;
   for (const auto& [step, truth] : truth_) {
     for (const auto& rt : truth.robots) {
       for (const auto& l : truth.landmarks) {
-        const auto z = MeasureRangeBearing(rt.pose, l.pose.Translation());
-        if (z.range_m <= scenario_.sensors.lidar.max_range_m &&
-            std::abs(z.bearing_rad) <= scenario_.sensors.lidar.fov_rad / 2.0) {
-          reached[rt.id].insert(std::stoi(l.id));
-        }
+        if (in_reach(rt.pose, l)) reached[rt.id].insert(std::stoi(l.id));
       }
     }
   }
@@ -159,11 +161,7 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
       }
       // Landmarks the robot could have sensed so far (its true pose, the lidar's reach).
       for (const auto& l : truth.landmarks) {
-        const auto z = MeasureRangeBearing(rt->pose, l.pose.Translation());
-        if (z.range_m <= scenario_.sensors.lidar.max_range_m &&
-            std::abs(z.bearing_rad) <= scenario_.sensors.lidar.fov_rad / 2.0) {
-          seen.insert(std::stoi(l.id));
-        }
+        if (in_reach(rt->pose, l)) seen.insert(std::stoi(l.id));
       }
       const auto true_points = TrueLandmarks(truth);
       const auto errors = LandmarkErrors(est.landmarks, true_points, frame, cutoff_m);
