@@ -392,6 +392,8 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     d.cooperative_localization = c.Get("cooperative_localization", d.cooperative_localization);
     d.match_gate_probability = c.Get("match_gate_probability", d.match_gate_probability);
     d.transform_gate_probability = c.Get("transform_gate_probability", d.transform_gate_probability);
+    d.joint_transform = c.Get("joint_transform", d.joint_transform);
+    d.max_history_steps = c.Get("max_history_steps", d.max_history_steps);
     c.RejectUnknownKeys();
   }
 
@@ -620,6 +622,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           co.match_gate_probability, "must be in (0, 1)");
   c.Check(co.transform_gate_probability > 0.0 && co.transform_gate_probability < 1.0,
           "cooperation.transform_gate_probability", co.transform_gate_probability, "must be in (0, 1)");
+  c.Check(co.max_history_steps >= 0 && co.max_history_steps <= 10000, "cooperation.max_history_steps",
+          co.max_history_steps, "must be in 0..10000");
   return c.ok();
 }
 

@@ -212,6 +212,12 @@ struct CooperationOptions {
   // A mutual detection whose transform disagrees with the one held beyond this chi-square 3 dof
   // gate is not fused (an outlier: e.g. a detection paired with the wrong robot).
   double transform_gate_probability = 0.9999;
+  // At a rendezvous the snapshot also carries the sender's history (odometry and labelled scans
+  // since its first step, at most max_history_steps of them), and the receiver estimates the
+  // transform from both robots' histories at once (a joint MAP estimate) instead of aligning
+  // the two maps.
+  bool joint_transform = true;
+  int max_history_steps = 300;
 };
 
 // Replay of a recorded data set (UTIAS MRCLAM) instead of the simulation. The robots of the

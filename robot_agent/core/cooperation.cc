@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <tuple>
 #include <utility>
 
@@ -123,6 +124,7 @@ Cooperation::Cooperation(const common::ScenarioOptions& scenario, const std::str
   // A noiseless lidar still needs a usable measurement covariance.
   var_range_ = std::max(var_range_, 1e-12);
   var_bearing_ = std::max(var_bearing_, 1e-12);
+  if (self_index_ >= 0) first_pose_ = InitialPoseInOwnFrame(scenario.robots[self_index_]);
 }
 
 const std::vector<RendezvousEvent>& Cooperation::rendezvous() const { return rendezvous_; }
@@ -171,6 +173,39 @@ bool Cooperation::SnapshotValid(const MapSnapshot& m) const {
   }
   for (const auto& t : m.known_transforms) {
     if (scenario_.RobotIndex(t.peer) < 0 || t.peer == m.header.sender || !ValidTransform(t)) return false;
+  }
+  return HistoryValid(m);
+}
+
+bool Cooperation::HistoryValid(const MapSnapshot& m) const {
+  if (m.history.empty()) return true;
+  // Every step from 1 to the snapshot's, within the bound; finite readings; labels, not -1.
+  if (m.history.size() > static_cast<std::size_t>(scenario_.cooperation.max_history_steps) ||
+      m.history.size() != m.header.step || !Finite(m.first_pose)) {
+    return false;
+  }
+  constexpr std::size_t kMaxReadings = 4096;  // per step and kind
+  for (std::size_t i = 0; i < m.history.size(); ++i) {
+    const common::SensorStep& s = m.history[i];
+    if (s.lidar.stamp.step != i + 1 || !std::isfinite(s.lidar.stamp.time_s)) return false;
+    if (s.odometry.segments.size() > kMaxReadings || s.lidar.landmarks.size() > kMaxReadings ||
+        s.lidar.robots.size() > kMaxReadings) {
+      return false;
+    }
+    for (const auto& o : s.odometry.segments) {
+      if (!std::isfinite(o.v_mps) || !std::isfinite(o.w_radps) || !std::isfinite(o.time_s) ||
+          !(std::isfinite(o.dt_s) && o.dt_s >= 0.0)) {
+        return false;
+      }
+    }
+    for (const auto& d : s.lidar.landmarks) {
+      if (d.landmark_id < 1 || !(std::isfinite(d.range_m) && d.range_m > 0.0) || !std::isfinite(d.bearing_rad)) {
+        return false;
+      }
+    }
+    for (const auto& d : s.lidar.robots) {
+      if (!(std::isfinite(d.range_m) && d.range_m > 0.0) || !std::isfinite(d.bearing_rad)) return false;
+    }
   }
   return true;
 }
@@ -357,42 +392,161 @@ void Cooperation::HoldTransform(PeerState* peer, const TransformEstimate& t, std
   }
 }
 
-void Cooperation::AlignWithSnapshot(const MapSnapshot& m, const FilterEstimate& own, PeerState* sender) {
+Cooperation::CommonLandmarks Cooperation::MatchSnapshot(const MapSnapshot& m, const FilterEstimate& own,
+                                                        const TransformEstimate& held) const {
   // Moving landmarks are compared only when both maps hold them at the same step (a snapshot is
   // predicted to its own step).
   const bool same_step = own.step == m.header.step;
-  const TransformEstimate& held = *sender->transform;
   // A landmark that came from the other side (by provenance) is that side's estimate seen
   // through the transform held when it was merged: it would only confirm that transform.
   const int sender_index = scenario_.RobotIndex(m.header.sender);
   const Eigen::Matrix3d t_cov = held.Covariance();
-  std::vector<MapLandmark> mine, theirs;
+  CommonLandmarks out;
   std::vector<MatchCandidate> mine_c, theirs_c;
   for (const auto& l : SnapshotLandmarks(own, scenario_.cooperation.max_snapshot_landmarks)) {
     if ((!same_step && l.moving) || l.origin_robot == sender_index) continue;
-    mine.push_back(l);
+    out.mine.push_back(l);
     mine_c.push_back(Candidate(l));
   }
   for (const auto& l : m.landmarks) {
     if ((!same_step && l.moving) || l.origin_robot == self_index_) continue;
-    theirs.push_back(l);
+    out.theirs.push_back(l);
     theirs_c.push_back(Candidate(TransformLandmark(l, held.t, t_cov)));
   }
-  const std::vector<int> match =
+  out.match =
       MatchLandmarks(mine_c, theirs_c, common::ChiSquare2Quantile(scenario_.cooperation.match_gate_probability));
+  return out;
+}
+
+void Cooperation::AlignWithSnapshot(const MapSnapshot& m, const FilterEstimate& own, PeerState* sender) {
+  const CommonLandmarks common = MatchSnapshot(m, own, *sender->transform);
   std::vector<LandmarkPair> pairs;
-  for (std::size_t i = 0; i < match.size(); ++i) {
-    if (match[i] < 0) continue;
-    const MapLandmark& a = mine[match[i]];
-    const MapLandmark& b = theirs[i];
+  for (std::size_t i = 0; i < common.match.size(); ++i) {
+    if (common.match[i] < 0) continue;
+    const MapLandmark& a = common.mine[common.match[i]];
+    const MapLandmark& b = common.theirs[i];
     pairs.push_back({a.mean, a.covariance, b.mean, b.covariance, HeadingKnown(a) && HeadingKnown(b)});
   }
-  if (const auto aligned = AlignLandmarks(held, pairs)) HoldTransform(sender, *aligned, m.header.step);
+  if (const auto aligned = AlignLandmarks(*sender->transform, pairs)) HoldTransform(sender, *aligned, m.header.step);
+}
+
+std::optional<MapReference::Kinematics> Cooperation::JointKinematics(const MapLandmark& l) const {
+  if (l.motion == LandmarkMotionKind::kStatic) return MapReference::Kinematics{};
+  if (l.motion != LandmarkMotionKind::kUnicycle || (l.v_mps == 0.0 && l.w_radps == 0.0)) return std::nullopt;
+  // The filter's (v, w) is a weighted mean over its particles' candidates: the nearest one.
+  const common::KnownKinematics* nearest = nullptr;
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& k : scenario_.filter.known_kinematics) {
+    const double d = std::abs(k.v_mps - l.v_mps) + std::abs(k.w_radps - l.w_radps);
+    if (d < best) {
+      best = d;
+      nearest = &k;
+    }
+  }
+  if (nearest == nullptr) return std::nullopt;
+  const bool is_static = nearest->v_mps == 0.0 && nearest->w_radps == 0.0;
+  return MapReference::Kinematics{is_static, nearest->v_mps, nearest->w_radps};
+}
+
+std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& m, const FilterEstimate& own,
+                                                             const TransformEstimate& held) const {
+  // Both histories whole and of the same steps.
+  if (!JointPossible() || m.history.empty() || own.step != m.header.step || history_.size() != m.history.size()) {
+    return std::nullopt;
+  }
+  // Labels: the own tracks as they are; the sender's matched to an own landmark take its label,
+  // the others one of their own above every own track.
+  const CommonLandmarks common = MatchSnapshot(m, own, held);
+  std::map<int, MapReference::Kinematics> kinematics;
+  std::map<int, int> own_label, their_label;  // track -> label
+  for (const auto& l : common.mine) {
+    if (const auto k = JointKinematics(l)) {
+      kinematics[static_cast<int>(l.track_id)] = *k;
+      own_label[static_cast<int>(l.track_id)] = static_cast<int>(l.track_id);
+    }
+  }
+  int next_label = kinematics.empty() ? 1 : kinematics.rbegin()->first + 1;
+  int shared = 0;  // landmarks both robots read: without one, only the mutual detections tie the paths
+  for (std::size_t i = 0; i < common.theirs.size(); ++i) {
+    const MapLandmark& l = common.theirs[i];
+    const int own_track = common.match[i] < 0 ? -1 : static_cast<int>(common.mine[common.match[i]].track_id);
+    if (own_track >= 0 && own_label.count(own_track) != 0) {
+      their_label[static_cast<int>(l.track_id)] = own_track;
+      ++shared;
+    } else if (const auto k = JointKinematics(l)) {
+      kinematics[next_label] = *k;
+      their_label[static_cast<int>(l.track_id)] = next_label++;
+    }
+  }
+  if (shared == 0) return std::nullopt;
+  auto relabel = [](const common::SensorStep& s, const std::map<int, int>& labels) {
+    common::SensorStep out = s;
+    out.lidar.landmarks.clear();
+    for (auto d : s.lidar.landmarks) {
+      const auto it = labels.find(d.landmark_id);
+      if (it == labels.end()) continue;
+      d.landmark_id = it->second;
+      out.lidar.landmarks.push_back(d);
+    }
+    return out;
+  };
+  // The sender's first pose in the own frame, started from the held transform.
+  MapReference joint(scenario_, {{robot_id_, first_pose_}, {m.header.sender, common::Compose(held.t, m.first_pose)}},
+                     kinematics, scenario_.rendezvous.enable_from_step);
+  constexpr std::size_t kSolveEvery = 5;  // solved as it grows: each solve starts near the answer
+  for (std::size_t t = 0; t < history_.size(); ++t) {
+    joint.Add({relabel(history_[t], own_label), relabel(m.history[t], their_label)});
+    if ((t + 1) % kSolveEvery == 0 || t + 1 == history_.size()) joint.Solve();
+  }
+  // T(G_self <- G_sender) = first pose of the sender in the own frame * inverse(its first pose
+  // in its own frame).
+  const common::Pose2 first_inverse = common::Inverse(m.first_pose);
+  TransformEstimate out;
+  out.t = common::Compose(joint.FirstPose(1), first_inverse);
+  const Eigen::Matrix3d j = common::ComposeJacobianLeft(joint.FirstPose(1), first_inverse);
+  out.dependent = j * joint.FirstPoseCovariance(1) * j.transpose();
+  out.dependent = 0.5 * (out.dependent + out.dependent.transpose()).eval();
+  const double gate = ChiSquare3Quantile(scenario_.cooperation.transform_gate_probability);
+  if (!Finite(out.t) || !common::IsSymmetricPositiveDefinite<3>(out.dependent) ||
+      TransformDistanceSquared(held, out) > gate) {
+    return std::nullopt;
+  }
+  return out;
+}
+
+void Cooperation::Record(const common::SensorStep& step, const FilterEstimate& estimate) {
+  const bool fits = step.lidar.stamp.step == history_.size() + 1 &&
+                    history_.size() < static_cast<std::size_t>(scenario_.cooperation.max_history_steps) &&
+                    estimate.labels_detections && estimate.detection_tracks.size() == step.lidar.landmarks.size();
+  if (!history_usable_ || !fits) {
+    history_usable_ = false;
+    history_.clear();
+    return;
+  }
+  common::SensorStep kept;
+  kept.lidar.stamp = step.lidar.stamp;
+  kept.lidar.robots = step.lidar.robots;
+  kept.odometry = step.odometry;
+  for (std::size_t i = 0; i < step.lidar.landmarks.size(); ++i) {
+    if (estimate.detection_tracks[i] == 0) continue;
+    common::LandmarkDetection d = step.lidar.landmarks[i];
+    d.landmark_id = static_cast<int>(estimate.detection_tracks[i]);
+    kept.lidar.landmarks.push_back(d);
+  }
+  history_.push_back(std::move(kept));
 }
 
 void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
   PeerState& sender = peers_[m.header.sender];
-  if (filter != nullptr) AlignWithSnapshot(m, filter->Estimate(), &sender);
+  if (filter != nullptr) {
+    const FilterEstimate own = filter->Estimate();
+    if (const auto joint = JointTransform(m, own, *sender.transform)) {
+      HoldTransform(&sender, *joint, m.header.step);
+      ++joint_transforms_;
+    } else {
+      AlignWithSnapshot(m, own, &sender);
+    }
+  }
   const TransformEstimate& t_self_sender = *sender.transform;
   // Transitive frames: T(G_self <- G_k) = T(G_self <- G_sender) * T(G_sender <- G_k).
   for (const auto& ft : m.known_transforms) {
@@ -422,6 +576,10 @@ MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const FilterEstim
   MapSnapshot m;
   m.header = {robot_id_, peer, estimate.step, estimate.time_s, 0};
   if (with_map) m.landmarks = SnapshotLandmarks(estimate, scenario_.cooperation.max_snapshot_landmarks);
+  if (with_map && JointPossible()) {
+    m.first_pose = first_pose_;
+    m.history = history_;
+  }
   for (const auto& t : known_transforms()) {
     if (t.peer != peer) m.known_transforms.push_back(t);
   }
@@ -446,8 +604,10 @@ std::vector<LandmarkMovedNotice> Cooperation::MovedNotices(const std::vector<Mov
   return notices;
 }
 
-PeerOutbox Cooperation::AfterStep(const common::LidarScan& scan, const FilterEstimate& estimate) {
+PeerOutbox Cooperation::AfterStep(const common::SensorStep& step, const FilterEstimate& estimate) {
   PeerOutbox out;
+  const common::LidarScan& scan = step.lidar;
+  Record(step, estimate);
   const std::uint32_t k = estimate.step;
   last_step_ = k;
   any_step_ = true;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/config/scenario_options.h"
+#include "robot_agent/core/map_reference.h"
 #include "robot_agent/core/peer_messages.h"
 #include "robot_agent/core/rendezvous.h"
 #include "robot_agent/core/slam_filter.h"
@@ -22,7 +23,7 @@ namespace mrslam::robot_agent {
 // Per step k the node calls, in this order:
 //   1. Receive(inbox of step k-1, filter)   peer messages sent during step k-1, in a fixed order
 //   2. filter->Process(step k)
-//   3. AfterStep(scan k, estimate k)         -> the outbox of step k
+//   3. AfterStep(step k, estimate k)         -> the outbox of step k
 class Cooperation {
  public:
   Cooperation(const common::ScenarioOptions& scenario, const std::string& robot_id);
@@ -32,7 +33,8 @@ class Cooperation {
 
   // Decides what to send after step k: relative measurements to every robot detected in the
   // scan (from rendezvous.enable_from_step on), map snapshots to peers at a new rendezvous.
-  PeerOutbox AfterStep(const common::LidarScan& scan, const FilterEstimate& estimate);
+  // Keeps the step (odometry, scan labelled by estimate.detection_tracks) in the own history.
+  PeerOutbox AfterStep(const common::SensorStep& step, const FilterEstimate& estimate);
 
   // "Landmark moved" notices for every peer whose frame is known (paper B, peer to peer instead
   // of through a leader), for the landmarks the filter saw move during the step.
@@ -44,6 +46,8 @@ class Cooperation {
   std::vector<FrameTransform> known_transforms() const;
   std::vector<std::string> frames_known() const;
   int rejected_messages() const;
+  // Transforms estimated jointly from both robots' histories (cooperation.joint_transform).
+  int joint_transforms() const { return joint_transforms_; }
   // Landmark-moved notices accepted so far (the ELA filter will use them).
   int moved_notices() const { return moved_notices_; }
   // Mutual detections used to correct the own pose (cooperative localization).
@@ -82,14 +86,39 @@ class Cooperation {
   bool HeaderValid(const PeerHeader& h) const;
   bool MeasurementValid(const RelativeMeasurement& m) const;
   bool SnapshotValid(const MapSnapshot& m) const;
+  bool HistoryValid(const MapSnapshot& m) const;
   // Pairs own detections and peer measurements into mutual detections and applies them.
   void PairMutualDetections(const std::string& peer, SlamFilter* filter);
   void ApplyMutualDetection(const std::string& peer, std::uint32_t own_step, const OwnDetection& own,
                             const RelativeMeasurement& theirs, SlamFilter* filter);
   void ApplySnapshot(const MapSnapshot& m, SlamFilter* filter);
-  // Refines the transform to the snapshot's sender by the landmarks both maps hold (matched
-  // through the held transform, aligned by AlignLandmarks with the held one as prior).
+  // The landmarks both maps hold: the own and the snapshot's (at the same step; those that came
+  // from the other side by provenance left out), matched through the held transform.
+  struct CommonLandmarks {
+    std::vector<MapLandmark> mine, theirs;
+    std::vector<int> match;  // per theirs: the index into mine, or -1
+  };
+  CommonLandmarks MatchSnapshot(const MapSnapshot& m, const FilterEstimate& own, const TransformEstimate& held) const;
+  // Refines the transform to the snapshot's sender by the landmarks both maps hold (aligned by
+  // AlignLandmarks with the held one as prior).
   void AlignWithSnapshot(const MapSnapshot& m, const FilterEstimate& own, PeerState* sender);
+  // The transform to the snapshot's sender from both robots' histories (the joint MAP estimate
+  // of both paths and the landmarks, MapReference), or nothing when either history is missing
+  // or the estimate fails or disagrees with the held one beyond transform_gate_probability.
+  std::optional<TransformEstimate> JointTransform(const MapSnapshot& m, const FilterEstimate& own,
+                                                  const TransformEstimate& held) const;
+  // Whether the own history can take part in a joint estimate: joint_transform on, the history
+  // whole, and landmark kinematics it models (static or known candidates, not a constant turn rate).
+  bool JointPossible() const {
+    return scenario_.cooperation.joint_transform && history_usable_ &&
+           scenario_.filter.landmark_kinematics != common::LandmarkKinematics::kConstantTurnRate;
+  }
+  // The kinematics the joint estimate gives a mapped landmark: static, or the known candidate
+  // nearest to its (v, w); nothing for a landmark whose heading is not known yet or that is
+  // tracked with a constant turn rate.
+  std::optional<MapReference::Kinematics> JointKinematics(const MapLandmark& l) const;
+  // Keeps the step in the own history (while it is usable for the joint estimate).
+  void Record(const common::SensorStep& step, const FilterEstimate& estimate);
   // Whether an estimate made at step still refines the peer's current rendezvous event (the
   // first kEncounterRefineSteps steps of the encounter).
   bool Refining(const PeerState& peer, std::uint32_t step) const;
@@ -110,6 +139,13 @@ class Cooperation {
   int rejected_ = 0;
   int moved_notices_ = 0;
   int cooperative_updates_ = 0;
+  int joint_transforms_ = 0;
+  // The own history for the joint estimate: every step from step 1, each landmark detection
+  // labelled by its track (unlabelled ones left out); usable while no step is missing, every
+  // scan came labelled and it is within max_history_steps.
+  common::Pose2 first_pose_;
+  std::vector<common::SensorStep> history_;
+  bool history_usable_ = true;
 };
 
 }  // namespace mrslam::robot_agent

@@ -165,9 +165,11 @@ void FastSlam<D>::Process(const common::SensorStep& step) {
   // Valid detections sorted by (range, bearing, id): the result does not depend on the order
   // in which the scan lists them.
   std::vector<Detection> detections;
-  for (const auto& d : step.lidar.landmarks) {
+  const int scanned = static_cast<int>(step.lidar.landmarks.size());
+  for (int i = 0; i < scanned; ++i) {
+    const auto& d = step.lidar.landmarks[i];
     if (std::isfinite(d.range_m) && std::isfinite(d.bearing_rad) && d.range_m > 0.0) {
-      detections.push_back({d.range_m, WrapAngle(d.bearing_rad), d.landmark_id, 0});
+      detections.push_back({d.range_m, WrapAngle(d.bearing_rad), d.landmark_id, 0, i});
     }
   }
   std::sort(detections.begin(), detections.end(), [](const Detection& a, const Detection& b) {
@@ -175,6 +177,7 @@ void FastSlam<D>::Process(const common::SensorStep& step) {
   });
   for (int i = 0; i < static_cast<int>(detections.size()); ++i) detections[i].index = i;
   creation_ids_.assign(detections.size(), 0);
+  detection_labels_.assign(detections.size() * particles_.size(), 0);
 
   for (int p = 0; p < NumParticles(); ++p) {
     ProposeParticle(p, segments, var, dt, detections, &batch_);
@@ -184,6 +187,11 @@ void FastSlam<D>::Process(const common::SensorStep& step) {
 
   const std::vector<double> weights = NormalizeLogWeights(&log_weights_);
   last_ess_ = EffectiveSampleSize(weights);
+  const std::size_t best = static_cast<std::size_t>(std::max_element(weights.begin(), weights.end()) - weights.begin());
+  detection_tracks_.assign(scanned, 0);
+  for (const Detection& det : detections) {
+    detection_tracks_[det.scan_index] = detection_labels_[best * detections.size() + det.index];
+  }
   // The pose estimate comes from the weighted particles, before resampling adds its noise.
   EstimatePose(weights);
   if (filter_.resample_every_step || last_ess_ < filter_.resample_ess_fraction * NumParticles()) {
@@ -309,6 +317,7 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
   }
 
   // 5. Landmark updates at the sampled pose; new landmarks.
+  std::uint32_t* labels = detection_labels_.data() + static_cast<std::size_t>(p) * detections.size();
   for (const Match& match : matches_) {
     Block* block = MutableBlock(&particle, match.slot / kLanes);
     const int lane = match.slot % kLanes;
@@ -322,8 +331,12 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
     ++meta.sightings;
     meta.misses = 0;
     meta.last_seen_step = step_;
+    labels[match.detection] = meta.track_id;
   }
-  for (const int i : creations_) CreateLandmark(&particle, mu, detections[i]);
+  for (const int i : creations_) {
+    CreateLandmark(&particle, mu, detections[i]);
+    labels[i] = creation_ids_[i];
+  }
 }
 
 template <int D>
@@ -583,6 +596,8 @@ FilterEstimate FastSlam<D>::Estimate() const {
   e.effective_sample_size = last_ess_;
   e.pose = pose_;
   e.covariance = pose_covariance_;
+  e.labels_detections = true;
+  e.detection_tracks = detection_tracks_;
   std::vector<double> w(NumParticles());
   double sw = 0.0;
   for (int p = 0; p < NumParticles(); ++p) {

@@ -65,7 +65,9 @@ namespace mrslam::robot_agent {
 // particles holding it carry more than half of the total weight; its estimate is the weighted
 // mean over those particles (circular mean for heading) and the mixture covariance
 // sum w_p (P_p + d_p d_p^T) / sum w_p, d_p = mean_p - mean (heading difference wrapped), all
-// predicted to the current step (every landmark is predicted every step).
+// predicted to the current step (every landmark is predicted every step). Each detection's
+// track (FilterEstimate::detection_tracks) is the association of the particle of largest
+// weight before resampling.
 //
 // Owns its particles, its random stream (derived from (seed, robot id)) and scratch buffers.
 // Not thread-safe; pure (no DDS, no wall clock).
@@ -108,7 +110,8 @@ class FastSlam : public SlamFilter {
     double range_m = 0.0;
     double bearing_rad = 0.0;
     int landmark_id = -1;
-    int index = 0;  // position in the sorted scan
+    int index = 0;       // position in the sorted scan
+    int scan_index = 0;  // position in the scan as received
   };
   // A piece of the step's motion (from the IMU, v_mps is unused: each particle has its speed).
   using Segment = OdometryCalibration::Motion;
@@ -173,6 +176,9 @@ class FastSlam : public SlamFilter {
   OdometryCalibration calibration_;  // of the wheel odometry (scale, lag)
   std::uint32_t next_track_id_ = 1;
   std::vector<std::uint32_t> creation_ids_;  // per detection of this step, 0 until used
+  // Per particle and sorted detection of this step: the track it was matched to or created (0: none).
+  std::vector<std::uint32_t> detection_labels_;
+  std::vector<std::uint32_t> detection_tracks_;  // the most probable particle's, in scan order
 
   // Scratch.
   std::vector<double> d2_;

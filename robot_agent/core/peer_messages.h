@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include "common/se2.h"
+#include "common/sensor_types.h"
 #include "robot_agent/core/slam_filter.h"
 
 // Plain forms of the peer-to-peer messages (the node converts them to and from DDS). Every
@@ -41,11 +42,16 @@ struct FrameTransform {
 };
 
 // The sender's map (confirmed landmarks, predicted to header.step) in the sender's frame, and
-// the transforms the sender holds to other frames (for chaining).
+// the transforms the sender holds to other frames (for chaining). At a rendezvous also the
+// sender's history for the joint estimate of the transform: its first pose in its own frame and
+// every step from step 1 to header.step (odometry and lidar scan; each landmark detection's
+// landmark_id is the sender's track label of it, unlabelled detections left out; no IMU).
 struct MapSnapshot {
   PeerHeader header;
   std::vector<MapLandmark> landmarks;
   std::vector<FrameTransform> known_transforms;
+  common::Pose2 first_pose;
+  std::vector<common::SensorStep> history;
 };
 
 // "Landmark moved": the sender saw one of its mapped landmarks move (paper B).

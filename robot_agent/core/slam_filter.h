@@ -50,6 +50,11 @@ struct FilterEstimate {
   double effective_sample_size = 1.0;
   int particles = 1;
   std::vector<MapLandmark> landmarks;
+  // Whether the filter labels the detections (fastslam; not ekf, ekf_ela), and then per landmark
+  // detection of the step's scan, in the scan's order, the track its most probable hypothesis
+  // associated it with or created from it (0: none, e.g. ignored or invalid).
+  bool labels_detections = false;
+  std::vector<std::uint32_t> detection_tracks;
 };
 
 // A SLAM filter for one robot in its own frame: fastslam, ekf or ekf_ela. Pure: no DDS.

@@ -232,7 +232,7 @@ struct AgentNode::Impl {
     filter->Process(step);
     const FilterEstimate estimate = filter->Estimate();
     const std::size_t rendezvous_before = cooperation.rendezvous().size();
-    PeerOutbox outbox = cooperation.AfterStep(step.lidar, estimate);
+    PeerOutbox outbox = cooperation.AfterStep(step, estimate);
     outbox.moved = cooperation.MovedNotices(filter->TakeMovedLandmarks(), k, time_s);
     const auto sent = Send(std::move(outbox));
     for (std::size_t i = rendezvous_before; i < cooperation.rendezvous().size(); ++i) {

@@ -117,6 +117,13 @@ msg::MapSnapshot ToMsg(const MapSnapshot& s) {
   m.sequence_number(s.header.sequence);
   for (const auto& l : s.landmarks) m.landmarks().push_back(ToMsg(l));
   for (const auto& t : s.known_transforms) m.known_transforms().push_back(ToMsg(t));
+  m.first_pose(dds::ToMsg(s.first_pose));
+  for (const auto& step : s.history) {
+    msg::HistoryStep h;
+    h.lidar(dds::ToMsg(step.lidar));
+    h.odometry(dds::ToMsg(step.odometry));
+    m.history().push_back(std::move(h));
+  }
   return m;
 }
 MapSnapshot FromMsg(const msg::MapSnapshot& m) {
@@ -124,6 +131,13 @@ MapSnapshot FromMsg(const msg::MapSnapshot& m) {
   s.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
   for (const auto& l : m.landmarks()) s.landmarks.push_back(FromMsg(l));
   for (const auto& t : m.known_transforms()) s.known_transforms.push_back(TransformFromMsg(t));
+  s.first_pose = dds::FromMsg(m.first_pose());
+  for (const auto& h : m.history()) {
+    common::SensorStep step;
+    step.lidar = dds::FromMsg(h.lidar());
+    step.odometry = dds::FromMsg(h.odometry());
+    s.history.push_back(std::move(step));
+  }
   return s;
 }
 

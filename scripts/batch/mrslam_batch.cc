@@ -35,8 +35,8 @@
 #include "common/angles.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
+#include "robot_agent/core/map_reference.h"
 #include "robot_agent/core/slam_filter.h"
-#include "scripts/batch/map_reference.h"
 #include "world_sim/core/step_source.h"
 #include "world_sim/evaluator/metrics.h"
 
@@ -88,7 +88,7 @@ class Estimator {
  public:
   Estimator(const common::ScenarioOptions& options, int robot_index, std::uint64_t seed, bool reference) {
     if (reference) {
-      reference_ = std::make_unique<batch::MapReference>(options, robot_index);
+      reference_ = std::make_unique<robot_agent::MapReference>(options, robot_index);
     } else {
       filter_ = robot_agent::CreateFilter(options, options.robots[robot_index].id, seed);
       if (!filter_) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
@@ -121,7 +121,7 @@ class Estimator {
 
  private:
   std::unique_ptr<robot_agent::SlamFilter> filter_;
-  std::unique_ptr<batch::MapReference> reference_;
+  std::unique_ptr<robot_agent::MapReference> reference_;
 };
 
 // Runs one seed: the scenario's step source (the simulated World, or the replay of a recorded data
@@ -202,8 +202,8 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
   // T(G_i <- G_j) maps j's first pose in G_j to its first pose in G_i.
   const common::Pose2 start_j = robot_agent::InitialPoseInOwnFrame(options.robots[j]);
   const common::Pose2 guess = common::Compose(common::Compose(true_ij, start_j), {0.3, 0.3, common::kPi / 36});
-  batch::MapReference joint(options, {i, j}, {guess}, options.rendezvous.enable_from_step);
-  batch::MapReference own_i(options, i), own_j(options, j);
+  robot_agent::MapReference joint(options, {i, j}, {guess}, options.rendezvous.enable_from_step);
+  robot_agent::MapReference own_i(options, i), own_j(options, j);
   const std::string& id_i = options.robots[i].id;
   const std::string& id_j = options.robots[j].id;
   auto sees = [](const common::SensorStep& step, const std::string& id) {
@@ -275,10 +275,10 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
     const common::Pose2 true_0i = common::Between(frames[0].second, frames[i].second);
     guesses.push_back(common::Compose(common::Compose(true_0i, starts[i]), {0.3, 0.3, common::kPi / 36}));
   }
-  batch::MapReference joint(options, all, guesses, options.rendezvous.enable_from_step);
-  std::vector<std::unique_ptr<batch::MapReference>> alone;
+  robot_agent::MapReference joint(options, all, guesses, options.rendezvous.enable_from_step);
+  std::vector<std::unique_ptr<robot_agent::MapReference>> alone;
   alone.reserve(n);
-  for (int i = 0; i < n; ++i) alone.push_back(std::make_unique<batch::MapReference>(options, i));
+  for (int i = 0; i < n; ++i) alone.push_back(std::make_unique<robot_agent::MapReference>(options, i));
   if (calibrate) {
     joint.EstimateOdometryCalibration();
     for (auto& a : alone) a->EstimateOdometryCalibration();
@@ -306,7 +306,7 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   std::vector<evaluator::TruePoint> true_landmarks;
   for (const auto& l : last_truth.landmarks) true_landmarks.push_back({l.pose.Translation(), std::stoi(l.id)});
   // Scores robot i's path of `reference` (robot r of its set), moved by `to_own` into G_i.
-  auto score = [&](int i, const batch::MapReference& reference, int r, const common::Pose2& to_own) {
+  auto score = [&](int i, const robot_agent::MapReference& reference, int r, const common::Pose2& to_own) {
     RobotRun run;
     std::vector<double> position, heading, landmark;
     const std::vector<common::Pose2>& path = reference.Path(r);

@@ -7,3 +7,6 @@ mrslam_add_test(map_fusion_test
 mrslam_add_test(cooperation_test
   SOURCES cooperation_test.cc
   LIBS mrslam_agent_core)
+mrslam_add_test(joint_transform_test
+  SOURCES joint_transform_test.cc
+  LIBS mrslam_agent_core mrslam_world_core)

@@ -537,7 +537,9 @@ class Sim {
         scan.robots.push_back({e.time_s, z.range_m + rng_.Normal(0, 0.03),
                                common::WrapAngle(z.bearing_rad + rng_.Normal(0, 0.03)), scenario_.robots[j].id});
       }
-      const PeerOutbox out = agents_[i]->AfterStep(scan, filters_[i]->Estimate());
+      common::SensorStep step;
+      step.lidar = scan;
+      const PeerOutbox out = agents_[i]->AfterStep(step, filters_[i]->Estimate());
       for (const auto& m : out.measurements) next[Index(m.header.recipient)].measurements.push_back(m);
       for (const auto& m : out.maps) {
         next[Index(m.header.recipient)].maps.push_back(m);
@@ -846,6 +848,37 @@ TEST_F(HostileInput, AbsurdSize) {
   ExpectRejected({{}, {a}, {}});
 }
 
+TEST_F(HostileInput, BrokenHistories) {
+  // A history of every step up to the snapshot's, with one labelled reading per step.
+  const auto with_history = [this]() {
+    MapSnapshot m = GoodSnapshot();
+    for (std::uint32_t k = 1; k <= m.header.step; ++k) {
+      common::SensorStep s;
+      s.lidar.stamp = {"r2", k, 0.65 * k};
+      s.lidar.landmarks.push_back({0.65 * k, 3.0, 0.2, 1});
+      s.odometry.segments.push_back({0.65 * (k - 1), 0.65, 1.0, 0.2});
+      m.history.push_back(s);
+    }
+    return m;
+  };
+  // The well-formed one is taken (its joint estimate may or may not be used: no shared landmark).
+  sim_.agent(0).Receive({{}, {with_history()}, {}}, &sim_.filter(0));
+  ASSERT_EQ(sim_.agent(0).rejected_messages(), 0);
+  MapSnapshot nan = with_history();
+  nan.history[3].lidar.landmarks[0].range_m = std::nan("");
+  MapSnapshot odometry = with_history();
+  odometry.history[2].odometry.segments[0].v_mps = std::numeric_limits<double>::infinity();
+  MapSnapshot gap = with_history();
+  gap.history.erase(gap.history.begin() + 5);
+  MapSnapshot unlabelled = with_history();
+  unlabelled.history[0].lidar.landmarks[0].landmark_id = -1;
+  MapSnapshot first_pose = with_history();
+  first_pose.first_pose.x = std::nan("");
+  MapSnapshot extra = with_history();  // more steps than the snapshot's
+  extra.history.push_back(extra.history.back());
+  ExpectRejected({{}, {nan, odometry, gap, unlabelled, first_pose, extra}, {}});
+}
+
 TEST_F(HostileInput, StaleAndFutureSteps) {
   sim_.agent(0).Receive({{}, {GoodSnapshot()}, {}}, &sim_.filter(0));
   MapSnapshot a = GoodSnapshot();
@@ -934,7 +967,9 @@ class WithFastSlam : public ::testing::TestWithParam<common::LandmarkKinematics>
     common::LidarScan scan;
     scan.stamp = {"r1", e.step, e.time_s};
     scan.robots.push_back({e.time_s, 2.0, 0.3, "r2"});
-    agent->AfterStep(scan, e);
+    common::SensorStep step;
+    step.lidar = scan;
+    agent->AfterStep(step, e);
     RelativeMeasurement m;
     m.header = {"r2", "r1", e.step, e.time_s, 1};
     m.range_m = 2.0;

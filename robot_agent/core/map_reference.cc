@@ -1,9 +1,11 @@
-#include "scripts/batch/map_reference.h"
+#include "robot_agent/core/map_reference.h"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -13,7 +15,7 @@
 #include "robot_agent/core/landmark_ekf.h"
 #include "robot_agent/core/slam_filter.h"
 
-namespace mrslam::batch {
+namespace mrslam::robot_agent {
 namespace {
 
 using common::Pose2;
@@ -48,6 +50,40 @@ Eigen::Vector3d Minus(const Pose2& a, const Pose2& b) {
   return {a.x - b.x, a.y - b.y, WrapAngle(a.heading - b.heading)};
 }
 
+// The scenario's landmark kinematics by identity (the oracle's knowledge).
+std::map<int, MapReference::Kinematics> OracleKinematics(const common::ScenarioOptions& options) {
+  if (options.landmark_field.enabled) {
+    throw std::invalid_argument("the reference knows listed landmarks only, not a landmark_field");
+  }
+  std::map<int, MapReference::Kinematics> kinematics;
+  for (const auto& l : options.landmarks) {
+    MapReference::Kinematics k;
+    if (l.motion.model == common::LandmarkMotionModel::kUnicycle) {
+      k = {false, l.motion.v_mps, l.motion.w_radps};
+    } else if (l.motion.model != common::LandmarkMotionModel::kStatic) {
+      throw std::invalid_argument("the reference knows static and unicycle landmarks only (landmark " +
+                                  std::to_string(l.id) + ")");
+    }
+    kinematics[l.id] = k;
+  }
+  return kinematics;
+}
+
+// The scenario's robots of the set: the first from its known start, the others from the guesses.
+std::vector<MapReference::RobotStart> OracleRobots(const common::ScenarioOptions& options,
+                                                   const std::vector<int>& robot_indices,
+                                                   const std::vector<Pose2>& first_pose_guesses) {
+  if (robot_indices.empty() || first_pose_guesses.size() + 1 != robot_indices.size()) {
+    throw std::invalid_argument("the reference needs one first-pose guess per robot after the first");
+  }
+  std::vector<MapReference::RobotStart> robots;
+  for (std::size_t r = 0; r < robot_indices.size(); ++r) {
+    const common::RobotOptions& robot = options.robots.at(robot_indices[r]);
+    robots.push_back({robot.id, r == 0 ? InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]});
+  }
+  return robots;
+}
+
 }  // namespace
 
 MapReference::MapReference(const common::ScenarioOptions& options, int robot_index)
@@ -55,37 +91,25 @@ MapReference::MapReference(const common::ScenarioOptions& options, int robot_ind
 
 MapReference::MapReference(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
                            const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step)
+    : MapReference(options, OracleRobots(options, robot_indices, first_pose_guesses), OracleKinematics(options),
+                   robot_detections_from_step) {
+  replay_ = options.replay.enabled;
+}
+
+MapReference::MapReference(const common::ScenarioOptions& options, const std::vector<RobotStart>& robots,
+                           std::map<int, Kinematics> kinematics, int robot_detections_from_step)
     : dt_s_(options.run.dt_s),
       filter_(options.filter),
-      replay_(options.replay.enabled),
+      replay_(false),
       robot_var_(options.noise.robot_process_var),
       landmark_var_(options.noise.landmark_process_var),
       var_r_(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
       var_b_(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad),
-      robot_detections_from_step_(robot_detections_from_step) {
-  for (const auto& l : options.landmarks) {
-    Kinematics k;
-    if (l.motion.model == common::LandmarkMotionModel::kUnicycle) {
-      k = {false, l.motion.v_mps, l.motion.w_radps};
-    } else if (l.motion.model != common::LandmarkMotionModel::kStatic) {
-      throw std::invalid_argument("the reference knows static and unicycle landmarks only (landmark " +
-                                  std::to_string(l.id) + ")");
-    }
-    kinematics_[l.id] = k;
-  }
-  if (options.landmark_field.enabled) {
-    throw std::invalid_argument("the reference knows listed landmarks only, not a landmark_field");
-  }
-  if (robot_indices.empty() || first_pose_guesses.size() + 1 != robot_indices.size()) {
-    throw std::invalid_argument("the reference needs one first-pose guess per robot after the first");
-  }
-  for (std::size_t r = 0; r < robot_indices.size(); ++r) {
-    const common::RobotOptions& robot = options.robots.at(robot_indices[r]);
-    robots_.push_back({robot.id,
-                       {r == 0 ? robot_agent::InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]},
-                       robot_agent::OdometryCalibration(options.filter),
-                       {}});
-  }
+      robot_detections_from_step_(robot_detections_from_step),
+      kinematics_(std::move(kinematics)) {
+  if (robots.empty()) throw std::invalid_argument("the reference needs at least one robot");
+  for (const auto& robot : robots)
+    robots_.push_back({robot.id, {robot.first_pose}, OdometryCalibration(options.filter), {}});
 }
 
 Pose2 MapReference::StepLandmark(const Pose2& l, const Kinematics& k) const {
@@ -270,9 +294,9 @@ void MapReference::SolveOnce() {
                                  : robot_col(z.seen, z.step);
       const Eigen::Vector2d res = WhitenedResidual(z);
       // Jacobians of the residual (z - h): -dh.
-      const Eigen::MatrixXd jx = -robot_agent::MeasurementJacobianPose(p, x);
+      const Eigen::MatrixXd jx = -MeasurementJacobianPose(p, x);
       Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, 3);
-      jp.leftCols<2>() = -robot_agent::MeasurementJacobianLandmark(p, x);
+      jp.leftCols<2>() = -MeasurementJacobianLandmark(p, x);
       rows->Add(res, {{robot_col(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
     }
   };
@@ -331,6 +355,24 @@ void MapReference::SolveOnce() {
     lambda = std::max(lambda / 10.0, 1e-9);
     if (delta.cwiseAbs().maxCoeff() < 1e-7) break;
   }
+  if (robots_.size() < 2) return;
+  // The first-pose covariances of the robots placed by the data: blocks of (J^T J)^-1 at the
+  // solution.
+  Rows rows;
+  build(&rows);
+  Eigen::SparseMatrix<double> j(static_cast<int>(rows.residual.size()), cols);
+  j.setFromTriplets(rows.jacobian.begin(), rows.jacobian.end());
+  const Eigen::SparseMatrix<double> h = j.transpose() * j;
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(h);
+  for (std::size_t r = 1; r < robots_.size(); ++r) {
+    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(cols, 3);
+    const int col = robot_col(static_cast<int>(r), 0);
+    e.block<3, 3>(col, 0).setIdentity();
+    const Eigen::MatrixXd x = information.solve(e);
+    const bool ok = information.info() == Eigen::Success && x.allFinite();
+    robots_[r].first_pose_covariance = ok ? Eigen::Matrix3d(x.block<3, 3>(col, 0))
+                                          : Eigen::Matrix3d::Constant(std::numeric_limits<double>::infinity());
+  }
 }
 
 std::vector<std::pair<Eigen::Vector2d, int>> MapReference::Landmarks() const {
@@ -339,4 +381,4 @@ std::vector<std::pair<Eigen::Vector2d, int>> MapReference::Landmarks() const {
   return out;
 }
 
-}  // namespace mrslam::batch
+}  // namespace mrslam::robot_agent

@@ -11,10 +11,16 @@
 #include "common/sensor_types.h"
 #include "robot_agent/core/odometry_calibration.h"
 
-namespace mrslam::batch {
+namespace mrslam::robot_agent {
 
-// The approximately ideal estimator against which the agents are judged (mrslam_batch
-// --reference, mrslam_batch --transform-reference): at every step, the maximum a posteriori
+// The maximum a posteriori estimate of several robots' paths and of their landmarks' paths from
+// their odometry and readings, two uses:
+// * the approximately ideal estimator against which the agents are judged (mrslam_batch
+//   --reference, mrslam_batch --transform-reference), with the scenario's oracle knowledge;
+// * an agent's joint estimate of the transform to a peer at a rendezvous (cooperation.h), from
+//   both robots' histories, each reading labelled by the filter's association and each
+//   landmark's kinematics the filter's.
+// As the reference: at every step, the maximum a posteriori
 // estimate of the whole path so far of one robot, or of several robots at once, and of every
 // seen landmark's path, from all their odometry and detections so far, with oracle knowledge a
 // filter does not have: which landmark each detection is (the detections must carry identities)
@@ -40,6 +46,17 @@ namespace mrslam::batch {
 // Pure; not thread-safe.
 class MapReference {
  public:
+  struct Kinematics {
+    bool is_static = true;
+    double v_mps = 0.0, w_radps = 0.0;
+  };
+  // A robot of the set: its scenario id (robot detections name it) and its first pose in the
+  // frame (the first robot's anchors the frame; the others' are starting guesses).
+  struct RobotStart {
+    std::string id;
+    common::Pose2 first_pose;
+  };
+
   // One robot, in its own frame. Throws std::invalid_argument for landmark models other than
   // static and unicycle, or a landmark_field.
   MapReference(const common::ScenarioOptions& options, int robot_index);
@@ -49,6 +66,12 @@ class MapReference {
   // count from step robot_detections_from_step on.
   MapReference(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
                const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step);
+  // Without oracle knowledge: the readings' landmark_id fields are labels chosen by the caller,
+  // each landmark's kinematics is given by label (a reading of a label not listed is left out),
+  // and the robots' first poses are given. options supply the step, the noise models and the
+  // odometry calibration only.
+  MapReference(const common::ScenarioOptions& options, const std::vector<RobotStart>& robots,
+               std::map<int, Kinematics> kinematics, int robot_detections_from_step);
 
   // One sensor step per robot of the set, in the set's order, then Solve.
   void Process(const std::vector<common::SensorStep>& steps) {
@@ -68,16 +91,15 @@ class MapReference {
   // Robot r of the set (0: the first): its current pose and its first pose, in the frame.
   const common::Pose2& Pose(int r = 0) const { return robots_.at(r).path.back(); }
   const common::Pose2& FirstPose(int r) const { return robots_.at(r).path.front(); }
+  // Robot r's (r >= 1) first-pose covariance at the last solution: the block of the inverse of
+  // the Gauss-Newton information J^T J (the Laplace approximation of the posterior).
+  const Eigen::Matrix3d& FirstPoseCovariance(int r) const { return robots_.at(r).first_pose_covariance; }
   // Robot r's every pose, from its first (step 0) to the last step added.
   const std::vector<common::Pose2>& Path(int r) const { return robots_.at(r).path; }
   // The current position of every landmark seen so far, with its identity.
   std::vector<std::pair<Eigen::Vector2d, int>> Landmarks() const;
 
  private:
-  struct Kinematics {
-    bool is_static = true;
-    double v_mps = 0.0, w_radps = 0.0;
-  };
   struct Chain {  // one landmark's states from its first sighting on (static: one state)
     int first_step = 0;
     Kinematics kinematics;
@@ -87,10 +109,11 @@ class MapReference {
   struct Robot {
     std::string id;
     std::vector<common::Pose2> path;  // path[0]: the first pose
-    robot_agent::OdometryCalibration calibration;
+    OdometryCalibration calibration;
     // motion[t - 1]: step t's calibrated odometry segments.
-    std::vector<std::vector<robot_agent::OdometryCalibration::Motion>> motion;
+    std::vector<std::vector<OdometryCalibration::Motion>> motion;
     Eigen::Vector3d correction{1.0, 1.0, 0.0};  // (s_v, s_w, b_w)
+    Eigen::Matrix3d first_pose_covariance = Eigen::Matrix3d::Zero();
   };
   // Step t's motion in the robot's frame under `correction`: x_t = Compose(x_{t-1}, increment)
   // (a unicycle step is one), the corrected segments composed.
@@ -128,4 +151,4 @@ class MapReference {
   std::vector<Reading> readings_;
 };
 
-}  // namespace mrslam::batch
+}  // namespace mrslam::robot_agent

@@ -1,4 +1,4 @@
-#include "scripts/batch/map_reference.h"
+#include "robot_agent/core/map_reference.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include "common/angles.h"
 #include "common/config/scenario_options.h"
@@ -15,7 +16,7 @@
 #include "robot_agent/core/slam_filter.h"
 #include "world_sim/core/step_source.h"
 
-namespace mrslam::batch {
+namespace mrslam::robot_agent {
 namespace {
 
 const std::string kPaperScenario = std::string(MRSLAM_TEST_SOURCE_DIR) + "/config/paper_two_robots.yaml";
@@ -114,6 +115,29 @@ TEST(MapReference, PlacesASecondRobotFromTheDataNotFromItsGuess) {
   EXPECT_LT(std::abs(common::WrapAngle(reference.FirstPose(1).heading - truth.heading)), 1e-3);
 }
 
+TEST(MapReference, FirstPoseCovarianceCoversTheError) {
+  // With the scenario's noise: the second robot's first pose against the truth, whitened by the
+  // covariance the solver reports, over seeds.
+  double nees = 0.0;
+  constexpr int kSeeds = 5;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    common::ScenarioOptions o = PaperScenario();
+    o.seed = seed;
+    const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
+    const auto frames = source->Truth().frames;
+    const common::Pose2 truth = common::Compose(common::Between(frames[0].second, frames[1].second),
+                                                robot_agent::InitialPoseInOwnFrame(o.robots[1]));
+    MapReference reference(o, {0, 1}, {common::Compose(truth, {0.3, -0.4, 0.1})}, /*robot_detections_from_step=*/14);
+    for (int k = 0; k < 20; ++k) reference.Process(source->Step());
+    const common::Pose2& x = reference.FirstPose(1);
+    const Eigen::Vector3d e(x.x - truth.x, x.y - truth.y, common::WrapAngle(x.heading - truth.heading));
+    nees += e.dot(reference.FirstPoseCovariance(1).ldlt().solve(e));
+  }
+  // Chi-square with 15 dof: 99.8 % of it within [4.3, 34.3].
+  EXPECT_GT(nees, 4.3);
+  EXPECT_LT(nees, 34.3);
+}
+
 // r1's whole path as a smoother solved every 15 steps holds it, from the given steps.
 std::vector<common::Pose2> SmoothedPath(const common::ScenarioOptions& o,
                                         const std::vector<common::SensorStep>& steps) {
@@ -192,4 +216,4 @@ TEST(MapReference, RejectsWhatItCannotModel) {
 }
 
 }  // namespace
-}  // namespace mrslam::batch
+}  // namespace mrslam::robot_agent
