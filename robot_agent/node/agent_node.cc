@@ -174,7 +174,8 @@ struct AgentNode::Impl {
     for (auto& m : outbox.maps) {
       stamp(&m.header);
       SendTo(writers(m.header.recipient).map, ToMsg(m), m.header.recipient, &counts);
-      spdlog::info("sent a map snapshot of {} landmarks to {}", m.landmarks.size(), m.header.recipient);
+      spdlog::info("sent a map snapshot of {} landmarks and a history of {} steps to {}", m.landmarks.size(),
+                   m.history.size(), m.header.recipient);
     }
     for (auto& m : outbox.moved) {
       stamp(&m.header);
@@ -215,10 +216,18 @@ struct AgentNode::Impl {
     if (auto it = inbox.find(k - 1); it != inbox.end()) {
       SortBySender(&it->second);
       const int before = cooperation.rejected_messages();
+      const int joint_before = cooperation.joint_transforms();
       cooperation.Receive(it->second, filter.get());
       if (const int bad = cooperation.rejected_messages() - before; bad > 0) {
         counters.rejected_samples += bad;
         spdlog::warn("rejected {} peer message(s) of step {}", bad, k - 1);
+      }
+      if (cooperation.joint_transforms() > joint_before) {
+        for (const auto& t : cooperation.known_transforms()) {
+          if (t.step != k - 1) continue;
+          spdlog::info("joint transform from both histories at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)",
+                       t.step, options.robot_id, t.peer, t.t_self_peer.x, t.t_self_peer.y, t.t_self_peer.heading);
+        }
       }
       inbox.erase(it);
     }
