@@ -565,8 +565,13 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
   moved.reserve(m.landmarks.size());
   const Eigen::Matrix3d t_cov = t_self_sender.Covariance();
   for (const auto& l : m.landmarks) {
-    // The own landmarks coming back (by provenance) carry nothing new: not merged again.
-    if (l.origin_robot != self_index_) moved.push_back(TransformLandmark(l, t_self_sender.t, t_cov));
+    // The own landmarks coming back (by provenance) carry nothing new: not merged again. Nor
+    // are moving landmarks whose motion the sender estimates (constant turn rate): the model
+    // holds only until the landmark turns or stops, and a landmark the receiver has not seen
+    // would be predicted by it until it leaves the map.
+    const bool estimated_mover = l.moving && l.motion == LandmarkMotionKind::kConstantTurnRate;
+    if (l.origin_robot != self_index_ && !estimated_mover)
+      moved.push_back(TransformLandmark(l, t_self_sender.t, t_cov));
   }
   if (moved.empty()) return;
   filter->MergeLandmarks(moved, scenario_.cooperation.map_fusion, scenario_.cooperation.match_gate_probability);

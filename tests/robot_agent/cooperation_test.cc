@@ -769,6 +769,23 @@ TEST_F(HostileInput, GoodSnapshotIsMerged) {
   EXPECT_EQ(sim_.agent(0).rejected_messages(), 0);
 }
 
+TEST_F(HostileInput, MoversWithAnEstimatedMotionAreNotMerged) {
+  // A moving landmark the peer tracks with a constant turn rate stays out of the own map; one
+  // that follows known kinematics is merged.
+  MapSnapshot estimated = GoodSnapshot();
+  estimated.landmarks[0].moving = true;
+  estimated.landmarks[0].motion = LandmarkMotionKind::kConstantTurnRate;
+  const int merges = sim_.filter(0).merges;
+  sim_.agent(0).Receive({{}, {estimated}, {}}, &sim_.filter(0));
+  EXPECT_EQ(sim_.filter(0).merges, merges);
+  MapSnapshot known = GoodSnapshot();
+  known.landmarks[0].moving = true;
+  known.landmarks[0].motion = LandmarkMotionKind::kUnicycle;
+  sim_.agent(0).Receive({{}, {known}, {}}, &sim_.filter(0));
+  EXPECT_EQ(sim_.filter(0).merges, merges + 1);
+  EXPECT_EQ(sim_.agent(0).rejected_messages(), 0);
+}
+
 TEST_F(HostileInput, NanAndInfinity) {
   MapSnapshot a = GoodSnapshot();
   a.landmarks[0].mean.x() = std::nan("");
