@@ -1,5 +1,6 @@
 // Multi-process: world_sim and two robot_agent processes complete paper_two_robots.yaml in
-// lockstep; each agent publishes an estimate for every step, in order, from its own frame.
+// lockstep; each agent publishes an estimate for every step, in order, from its own frame, and
+// places the other from both histories when they meet.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -44,6 +45,10 @@ TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
   for (std::size_t i = 0; i < agents.size(); ++i) {
     const auto& id = scenario.robots[i].id;
     EXPECT_EQ(agents[i]->WaitExit(seconds(30)), std::optional<int>(0)) << testing::ReadFile(dir + "/" + id + ".log");
+    // The robots meet: each agent's history crossed DDS with its snapshot and the other placed
+    // it by the joint estimate.
+    EXPECT_THAT(testing::ReadFile(dir + "/" + id + ".log"), ::testing::HasSubstr("joint transform from both histories"))
+        << id;
   }
   for (const auto& r : scenario.robots) {
     std::vector<std::uint32_t> steps;

@@ -91,6 +91,33 @@ TEST(AgentMsgConversionTest, PeerMessagesRoundTrip) {
   EXPECT_EQ(sb.known_transforms[0].peer, "r4");
   EXPECT_EQ(sb.known_transforms[0].t_self_peer.heading, 0.6);
   EXPECT_EQ(sb.known_transforms[0].covariance, s.known_transforms[0].covariance);
+  EXPECT_TRUE(sb.history.empty());
+
+  // A snapshot with a history: its first pose and every step's odometry and scan.
+  MapSnapshot h = s;
+  h.first_pose = {-0.2, -0.5, 1.23};
+  for (std::uint32_t k = 1; k <= 3; ++k) {
+    common::SensorStep step;
+    step.lidar.stamp = {"r3", k, 0.65 * k};
+    step.lidar.landmarks.push_back({0.65 * k, 2.5 + k, -0.3, static_cast<int>(k)});
+    step.lidar.robots.push_back({0.65 * k, 4.0, 0.1, "r1"});
+    step.odometry.stamp = step.lidar.stamp;
+    step.odometry.segments.push_back({0.65 * (k - 1), 0.65, 1.0, 0.2});
+    h.history.push_back(step);
+  }
+  const auto hb = FromMsg(ToMsg(h));
+  EXPECT_EQ(hb.first_pose.Vector(), h.first_pose.Vector());
+  ASSERT_EQ(hb.history.size(), 3U);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(hb.history[i].lidar.stamp.step, i + 1);
+    ASSERT_EQ(hb.history[i].lidar.landmarks.size(), 1U);
+    EXPECT_EQ(hb.history[i].lidar.landmarks[0].landmark_id, static_cast<int>(i + 1));
+    EXPECT_EQ(hb.history[i].lidar.landmarks[0].range_m, h.history[i].lidar.landmarks[0].range_m);
+    ASSERT_EQ(hb.history[i].lidar.robots.size(), 1U);
+    EXPECT_EQ(hb.history[i].lidar.robots[0].seen_robot_id, "r1");
+    ASSERT_EQ(hb.history[i].odometry.segments.size(), 1U);
+    EXPECT_EQ(hb.history[i].odometry.segments[0].w_radps, 0.2);
+  }
 
   LandmarkMovedNotice n;
   n.header = {"r2", "r1", 30, 19.5, 7};
