@@ -352,6 +352,7 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     d.landmark_turn_rate_process_var = f.Get("landmark_turn_rate_process_var", d.landmark_turn_rate_process_var);
     d.landmark_turn_rate_prior_sd_radps =
         f.Get("landmark_turn_rate_prior_sd_radps", d.landmark_turn_rate_prior_sd_radps);
+    d.landmark_static_prior = f.Get("landmark_static_prior", d.landmark_static_prior);
     d.confirm_sightings = f.Get("confirm_sightings", d.confirm_sightings);
     d.drop_after_misses = f.Get("drop_after_misses", d.drop_after_misses);
     d.max_landmark_position_sd_m = f.Get("max_landmark_position_sd_m", d.max_landmark_position_sd_m);
@@ -582,6 +583,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           f.landmark_turn_rate_process_var, "must not be negative");
   c.Check(f.landmark_turn_rate_prior_sd_radps > 0.0, "filter.landmark_turn_rate_prior_sd_radps",
           f.landmark_turn_rate_prior_sd_radps, "must be positive");
+  c.Check(f.landmark_static_prior >= 0.0 && f.landmark_static_prior < 1.0, "filter.landmark_static_prior",
+          f.landmark_static_prior, "must be in [0, 1)");
   c.Check(f.confirm_sightings >= 1, "filter.confirm_sightings", f.confirm_sightings, "must be at least 1");
   c.Check(f.drop_after_misses >= 1, "filter.drop_after_misses", f.drop_after_misses, "must be at least 1");
   c.Check(f.max_landmark_position_sd_m > 0.0, "filter.max_landmark_position_sd_m", f.max_landmark_position_sd_m,

@@ -154,6 +154,11 @@ struct FilterOptions {
   double landmark_speed_process_var = 1e-4;      // (m/s)^2 per step
   double landmark_turn_rate_process_var = 1e-4;  // (rad/s)^2 per step
   double landmark_turn_rate_prior_sd_radps = 0.5;
+  // constant_turn_rate, fastslam: prior probability that a newly seen landmark stands still. At
+  // its second sighting each particle takes it as static (fixed, no process noise) or moving
+  // (constant turn rate) by this prior and the likelihood of the displacement between the two
+  // sightings; the weights settle which is right (0: every landmark has the motion model).
+  double landmark_static_prior = 0.5;
   int confirm_sightings = 2;  // tentative until seen this many times
   int drop_after_misses = 5;  // dropped when expected in view but missed this many times
   // FastSLAM: a landmark whose position standard deviation sqrt(var_x + var_y) grows beyond this

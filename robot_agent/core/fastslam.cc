@@ -359,6 +359,11 @@ void FastSlam<D>::PredictLandmarks(Particle* particle, double dt) {
       // Landmarks seen once: no motion (v = 0 in the kernel); the position spreads by the
       // displacement of unknown direction; heading and speed stay undefined (zeroed).
       for (int l = 0; l < lanes; ++l) {
+        if (block->meta[l].stationary) {
+          // Static (v = w = 0 with no variance: the kernel moved nothing): no process noise.
+          for (int i = 0; i < D; ++i) block->Cov(i, i, l) -= q_[i];
+          continue;
+        }
         if (!block->meta[l].position_only) continue;
         for (int i = 2; i < D; ++i) {
           block->Mean(i, l) = 0.0;
@@ -470,6 +475,19 @@ void FastSlam<D>::StartFullState(Block* block, int lane, const Pose2& pose, cons
       meta.candidate = static_cast<std::int8_t>(c);
     }
     if constexpr (D == 5) {
+      if (SampleStationary(delta, delta_cov, n)) {
+        // Static: both sightings see one point, fused; no heading, speed or turn rate.
+        const Eigen::Matrix2d i1 = p1_cov.inverse(), i2 = p2_cov.inverse();
+        const Eigen::Matrix2d p = (i1 + i2).inverse();
+        mean.template head<2>() = p * (i1 * p1 + i2 * p2);
+        cov.setZero();
+        cov.template topLeftCorner<2, 2>() = 0.5 * (p + p.transpose());
+        cov(2, 2) = kUnknownHeadingVar;
+        block->Set(lane, mean, cov);
+        meta.position_only = false;
+        meta.stationary = true;
+        return;
+      }
       // v = |delta| / (n dt); w unknown: prior N(0, sd_w^2); heading = chord + (n - 1) w dt / 2.
       const double t = n * dt;
       const double w_var = filter_.landmark_turn_rate_prior_sd_radps * filter_.landmark_turn_rate_prior_sd_radps;
@@ -497,6 +515,22 @@ void FastSlam<D>::StartFullState(Block* block, int lane, const Pose2& pose, cons
     block->Set(lane, mean, cov);
     meta.position_only = false;
   }
+}
+
+template <int D>
+bool FastSlam<D>::SampleStationary(const Eigen::Vector2d& delta, const Eigen::Matrix2d& delta_cov, int steps) {
+  const double prior = filter_.landmark_static_prior;
+  if (prior <= 0.0) return false;
+  // Static: delta ~ N(0, C). Moving: delta = s t u with u uniform in direction and s uniform in
+  // [0, s_max], of density 1 / (2 pi |delta| s_max t) within s_max t (|delta| floored at the
+  // noise's scale, where the noise blurs that density's peak at zero).
+  const double log_static = common::LogGaussian2(delta, delta_cov);
+  const double reach = MaxLandmarkSpeed(filter_) * step_dt_s_ * steps;
+  const double noise = std::sqrt(0.5 * delta_cov.trace());
+  const double log_moving = -std::log(2.0 * kPi * std::max(delta.norm(), noise) * reach);
+  const double odds = std::log(prior / (1.0 - prior)) + log_static - log_moving;
+  const double p_static = 1.0 / (1.0 + std::exp(-odds));
+  return rng_.Uniform() < p_static;
 }
 
 template <int D>
@@ -607,7 +641,7 @@ FilterEstimate FastSlam<D>::Estimate() const {
 
   // Map: per track id, the weight of its holders and weighted sums (see the class comment).
   struct Accumulator {
-    double weight = 0.0, heading_weight = 0.0, tentative_weight = 0.0;
+    double weight = 0.0, heading_weight = 0.0, tentative_weight = 0.0, moving_weight = 0.0;
     Eigen::Vector2d xy = Eigen::Vector2d::Zero();
     double c = 0.0, s = 0.0, v = 0.0, v_var = 0.0, w = 0.0;
     Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
@@ -626,6 +660,7 @@ FilterEstimate FastSlam<D>::Estimate() const {
     a.weight += wp;
     a.xy += wp * Eigen::Vector2d(b.Mean(0, l), b.Mean(1, l));
     if (b.meta[l].sightings < filter_.confirm_sightings) a.tentative_weight += wp;
+    if (!b.meta[l].stationary) a.moving_weight += wp;
     a.out.landmark_id = b.meta[l].landmark_id;
     a.out.origin_robot = b.meta[l].origin_robot;
     a.out.origin_track = b.meta[l].origin_track;
@@ -665,9 +700,11 @@ FilterEstimate FastSlam<D>::Estimate() const {
     if (a.heading_weight <= 0.0) m.covariance(2, 2) = kUnknownHeadingVar;
     m.covariance(2, 0) = m.covariance(0, 2);
     m.covariance(2, 1) = m.covariance(1, 2);
-    m.motion = D == 2   ? LandmarkMotionKind::kStatic
-               : D == 3 ? LandmarkMotionKind::kUnicycle
-                        : LandmarkMotionKind::kConstantTurnRate;
+    // Constant turn rate: static when the particles that take it as static carry more than
+    // half of its holders' weight.
+    m.motion = D == 2 || a.moving_weight < 0.5 * a.weight ? LandmarkMotionKind::kStatic
+               : D == 3                                   ? LandmarkMotionKind::kUnicycle
+                                                          : LandmarkMotionKind::kConstantTurnRate;
     if (a.heading_weight > 0.0) {
       m.v_mps = a.v / a.heading_weight;
       m.w_radps = a.w / a.heading_weight;
@@ -774,7 +811,11 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
       meta.first_seen_step = step_;
       meta.last_seen_step = std::min(step_, peer.last_seen_step);
       meta.sightings = static_cast<std::uint16_t>(std::max(1, filter_.confirm_sightings));
-      meta.position_only = D > 2 && !peer_heading;
+      // A landmark the peer takes as static stays static here (constant turn rate: no motion
+      // state to start).
+      meta.stationary = D == 5 && peer.motion == LandmarkMotionKind::kStatic;
+      if (meta.stationary) block->Cov(2, 2, lane) = kUnknownHeadingVar;
+      meta.position_only = D > 2 && !peer_heading && !meta.stationary;
       if constexpr (D == 3) {
         // The known candidate nearest the peer's (v, w).
         double best = std::numeric_limits<double>::infinity();

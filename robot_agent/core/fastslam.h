@@ -134,6 +134,9 @@ class FastSlam : public SlamFilter {
   void PredictLandmarks(Particle* particle, double dt);
   void CreateLandmark(Particle* particle, const common::Pose2& pose, const Detection& det);
   void StartFullState(Block* block, int lane, const common::Pose2& pose, const Detection& det);
+  // Constant turn rate: whether this particle takes a landmark displaced by delta (covariance
+  // delta_cov) over `steps` steps since its first sighting as static (filter.landmark_static_prior).
+  bool SampleStationary(const Eigen::Vector2d& delta, const Eigen::Matrix2d& delta_cov, int steps);
   void RemoveLandmark(Particle* particle, int slot);
   int FindIdentity(const Particle& particle, int landmark_id) const;
   bool InView(const common::Pose2& pose, double x, double y) const;

@@ -288,6 +288,7 @@ struct LandmarkMeta {
   std::uint16_t misses = 0;    // consecutive steps expected in view but not seen
   std::int8_t candidate = -1;  // known_candidates: index of the kinematics it follows
   bool position_only = false;  // seen once: position known, heading (and speed) not yet
+  bool stationary = false;     // constant turn rate: this particle takes it as static
 };
 
 // kLanes landmarks of one particle, structure-of-arrays: field[f][lane]. Fields: mean[D], the

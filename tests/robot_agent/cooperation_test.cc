@@ -1001,6 +1001,24 @@ class WithFastSlam : public ::testing::TestWithParam<common::LandmarkKinematics>
   std::unique_ptr<SlamFilter> filter_;
 };
 
+// Particles of a FastSLAM filter (of any state dimension) holding more than n landmarks, and
+// the number of particles.
+template <int D>
+const FastSlam<D>* AsFastSlam(const SlamFilter& f) {
+  return dynamic_cast<const FastSlam<D>*>(&f);
+}
+int ParticlesHoldingMoreThan(const SlamFilter& f, int n) {
+  int out = 0;
+  const auto count = [&](const auto* fast) {
+    for (int p = 0; fast != nullptr && p < fast->NumParticles(); ++p) out += fast->ParticleLandmarkCount(p) > n ? 1 : 0;
+  };
+  count(AsFastSlam<2>(f));
+  count(AsFastSlam<3>(f));
+  count(AsFastSlam<5>(f));
+  return out;
+}
+int NumParticlesOf(const SlamFilter& f) { return f.Estimate().particles; }
+
 void ExpectSameEstimate(const FilterEstimate& a, const FilterEstimate& b) {
   EXPECT_EQ(a.pose.Vector(), b.pose.Vector());
   ASSERT_EQ(a.landmarks.size(), b.landmarks.size());
@@ -1019,7 +1037,15 @@ TEST_P(WithFastSlam, MergeFusesMatchedAndAddsNewLandmarks) {
   in[0].covariance = before.landmarks[0].covariance;
   in[1].mean = {-3.0, -2.0, 0.0};  // a landmark this robot never saw
   in[1].covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
-  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999), 1);
+  const int added = filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999);
+  if (GetParam() == common::LandmarkKinematics::kConstantTurnRate) {
+    // Each particle gates with its own landmark covariance, which is tight where the particle
+    // takes the landmark as static: a particle far out in the mixture may take the first as new.
+    EXPECT_GE(added, 1);
+    EXPECT_LE(ParticlesHoldingMoreThan(*filter_, 3), NumParticlesOf(*filter_) / 20);
+  } else {
+    EXPECT_EQ(added, 1);
+  }
   const FilterEstimate after = filter_->Estimate();
   ASSERT_EQ(after.landmarks.size(), 3u);
   int near_new = 0;
@@ -1055,19 +1081,34 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
     return n;
   };
   const Eigen::Vector2d far(-20.0, -20.0), farther(-30.0, 20.0);  // out of view, unmatched
-  std::vector<MapLandmark> in(2);
+  const Eigen::Vector2d still(20.0, -20.0);                       // the same, static for the peer
+  // The first two with the filter's motion model, as a peer of the same scenario reports them.
+  const LandmarkMotionKind kind = GetParam() == common::LandmarkKinematics::kStatic ? LandmarkMotionKind::kStatic
+                                  : GetParam() == common::LandmarkKinematics::kKnownCandidates
+                                      ? LandmarkMotionKind::kUnicycle
+                                      : LandmarkMotionKind::kConstantTurnRate;
+  std::vector<MapLandmark> in(3);
   in[0].mean = {far.x(), far.y(), 0.0};
   in[0].covariance = Eigen::Vector3d(1.9, 1.9, 3.0).asDiagonal();  // sd sqrt(3.8) < 2 m
+  in[0].motion = kind;
   in[1].mean = {farther.x(), farther.y(), 0.0};
   in[1].covariance = Eigen::Vector3d(2.1, 2.1, 3.0).asDiagonal();  // sd sqrt(4.2) > 2 m
-  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999), 1);
+  in[1].motion = kind;
+  in[2].mean = {still.x(), still.y(), 0.0};
+  in[2].covariance = Eigen::Vector3d(1.9, 1.9, 3.0).asDiagonal();
+  in[2].motion = LandmarkMotionKind::kStatic;
+  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999), 2);
   EXPECT_EQ(count_near(filter_->Estimate(), far), 1);
   EXPECT_EQ(count_near(filter_->Estimate(), farther), 0);
+  EXPECT_EQ(count_near(filter_->Estimate(), still), 1);
   testing::TinyWorld world(options_, 5);
   for (int k = 0; k < 10; ++k) filter_->Process(world.Step());
   const FilterEstimate after = filter_->Estimate();
-  // Static landmarks keep their covariance when unseen; a motion model spreads it every step.
+  // Static landmarks keep their covariance when unseen; a motion model spreads it every step. A
+  // constant-turn-rate filter keeps a landmark the peer takes as static static; known
+  // candidates have no static model.
   EXPECT_EQ(count_near(after, far), GetParam() == common::LandmarkKinematics::kStatic ? 1 : 0);
+  EXPECT_EQ(count_near(after, still), GetParam() == common::LandmarkKinematics::kKnownCandidates ? 0 : 1);
   for (const auto& l : after.landmarks) {
     const double position_variance = l.covariance(0, 0) + l.covariance(1, 1);
     EXPECT_LE(position_variance, 4.0 + 1e-9);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -179,8 +180,38 @@ TEST(FastSlam, ConstantTurnRateEstimatesSpeedAndTurnRate) {
     for (int i = 1; i < 3; ++i) {
       const MapLandmark* still = Nearest(e, world.landmarks()[i].Translation());
       EXPECT_LT(std::abs(still->v_mps), 0.05) << "seed " << seed;
+      // Most of the weight holding it has settled on the static hypothesis (landmark_static_prior).
+      EXPECT_EQ(still->motion, LandmarkMotionKind::kStatic) << "seed " << seed;
+      EXPECT_FALSE(still->moving);
     }
   }
+}
+
+TEST(FastSlam, StaticHypothesisKeepsAnUnseenStaticLandmarkWhereItWas) {
+  // A static landmark seen for 10 steps, then out of range for 40: with the static hypothesis
+  // its position and covariance stay; with every landmark moving (prior 0) the speed's random
+  // walk spreads it.
+  double sd_with = 0.0, sd_without = 0.0;
+  for (const double prior : {0.5, 0.0}) {
+    common::ScenarioOptions o = OneRobotScenario(0.5, 0.0, 200);
+    o.robots[0].initial_pose = {0.0, 0.0, 0.0};
+    o.sensors.lidar.max_range_m = 6.0;
+    AddLandmark(&o, 1, {2.0, 1.0, 0.0});
+    AddLandmark(&o, 2, {25.0, 1.0, 0.0});  // keeps the robot company later
+    o.filter.landmark_kinematics = common::LandmarkKinematics::kConstantTurnRate;
+    o.filter.landmark_static_prior = prior;
+    o.filter.max_landmark_position_sd_m = std::numeric_limits<double>::infinity();
+    TinyWorld world(o, 3);
+    const auto filter = CreateFilter(o, "r1", 3);
+    for (int k = 0; k < 50; ++k) filter->Process(world.Step());  // 25 m on: out of range since step 16
+    const FilterEstimate e = filter->Estimate();
+    const MapLandmark* first = Nearest(e, world.landmarks()[0].Translation());
+    ASSERT_NE(first, nullptr);
+    EXPECT_LT((first->mean.head<2>() - world.landmarks()[0].Translation()).norm(), 0.5) << "prior " << prior;
+    (prior > 0.0 ? sd_with : sd_without) = std::sqrt(first->covariance.topLeftCorner<2, 2>().trace());
+  }
+  EXPECT_LT(sd_with, 0.2);
+  EXPECT_GT(sd_without, 2.0 * sd_with);
 }
 
 // Two landmarks on straight paths that cross at the same time (at step 12): the track that
