@@ -51,6 +51,14 @@
 //    transform is later refined (SCI) by newer chains or replaced in effect by meeting k. The
 //    transforms also go on their own (a snapshot without landmarks) at every encounter that is
 //    not a rendezvous, every kShareFramesSteps of a long encounter, and without map merging.
+//  * Joint transform (cooperation.joint_transform). A fastslam agent's snapshot at a rendezvous
+//    also carries its history since step 1 (odometry, scans with each landmark reading labelled
+//    by its track). With both histories whole, the receiver labels the sender's readings of the
+//    landmarks matched as above with its own tracks and computes the MAP estimate of both paths
+//    and every labelled landmark's path (MapReference); the sender's first pose so placed gives
+//    T(G_self <- G_sender), with the first pose's covariance, and replaces the held transform
+//    (the alignment is then skipped) unless it lies beyond transform_gate_probability of it.
+//    Both sides solve the same problem from opposite anchors.
 //  * Validation. Every message is checked before use: known other sender, addressed here, a step
 //    not after the current one and not older than the last applied of its kind from that sender,
 //    finite numbers, symmetric positive-definite covariances, a snapshot within the size bound
@@ -570,8 +578,9 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
     // holds only until the landmark turns or stops, and a landmark the receiver has not seen
     // would be predicted by it until it leaves the map.
     const bool estimated_mover = l.moving && l.motion == LandmarkMotionKind::kConstantTurnRate;
-    if (l.origin_robot != self_index_ && !estimated_mover)
+    if (l.origin_robot != self_index_ && !estimated_mover) {
       moved.push_back(TransformLandmark(l, t_self_sender.t, t_cov));
+    }
   }
   if (moved.empty()) return;
   filter->MergeLandmarks(moved, scenario_.cooperation.map_fusion, scenario_.cooperation.match_gate_probability);

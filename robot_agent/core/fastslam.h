@@ -49,7 +49,10 @@ namespace mrslam::robot_agent {
 //     displacement between the two sightings (for known candidates, the candidate model is
 //     sampled per particle by the likelihood of the displacement length; for constant turn
 //     rate, v = length / elapsed time), with covariances from the first-order propagation of
-//     both sightings. New landmarks start from the inverse sensor model.
+//     both sightings. With constant turn rate each particle first samples whether the landmark
+//     stands still (SampleStationary: filter.landmark_static_prior and the displacement's
+//     likelihood); a static one is the two sightings fused, v = w = 0 exactly, and no process
+//     noise. New landmarks start from the inverse sensor model.
 //  6. Landmarks expected in the field of view but not seen drop_after_misses times in a row
 //     are removed; a landmark is tentative until seen confirm_sightings times. A landmark whose
 //     predicted position standard deviation sqrt(P_xx + P_yy) exceeds max_landmark_position_sd_m
@@ -65,9 +68,10 @@ namespace mrslam::robot_agent {
 // particles holding it carry more than half of the total weight; its estimate is the weighted
 // mean over those particles (circular mean for heading) and the mixture covariance
 // sum w_p (P_p + d_p d_p^T) / sum w_p, d_p = mean_p - mean (heading difference wrapped), all
-// predicted to the current step (every landmark is predicted every step). Each detection's
-// track (FilterEstimate::detection_tracks) is the association of the particle of largest
-// weight before resampling.
+// predicted to the current step (every landmark is predicted every step); its motion is static
+// (constant turn rate) when the holders taking it as static carry more than half of their
+// weight. Each detection's track (FilterEstimate::detection_tracks) is the association of the
+// particle of largest weight before resampling.
 //
 // Owns its particles, its random stream (derived from (seed, robot id)) and scratch buffers.
 // Not thread-safe; pure (no DDS, no wall clock).
