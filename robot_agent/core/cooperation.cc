@@ -501,10 +501,16 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
   // The sender's first pose in the own frame, started from the held transform.
   MapReference joint(scenario_, {{robot_id_, first_pose_}, {m.header.sender, common::Compose(held.t, m.first_pose)}},
                      kinematics, scenario_.rendezvous.enable_from_step);
-  constexpr std::size_t kSolveEvery = 5;  // solved as it grows: each solve starts near the answer
+  // Solved as it grows, so that each solve starts near its answer: after 5 steps, then whenever
+  // the history has grown by a quarter (at least 5 steps), and at the end; a few dozen solves
+  // for hundreds of steps.
+  std::size_t next_solve = 5;
   for (std::size_t t = 0; t < history_.size(); ++t) {
     joint.Add({relabel(history_[t], own_label), relabel(m.history[t], their_label)});
-    if ((t + 1) % kSolveEvery == 0 || t + 1 == history_.size()) joint.Solve();
+    if (t + 1 == next_solve || t + 1 == history_.size()) {
+      joint.Solve();
+      next_solve = std::max(next_solve + 5, (t + 1) * 5 / 4);
+    }
   }
   // T(G_self <- G_sender) = first pose of the sender in the own frame * inverse(its first pose
   // in its own frame).
