@@ -192,7 +192,7 @@ bool Cooperation::HistoryValid(const MapSnapshot& m) const {
       m.history.size() != m.header.step || !Finite(m.first_pose)) {
     return false;
   }
-  constexpr std::size_t kMaxReadings = 4096;  // per step and kind
+  constexpr std::size_t kMaxReadings = 256;  // per step and kind: a scan of a few hundred detections at most
   for (std::size_t i = 0; i < m.history.size(); ++i) {
     const common::SensorStep& s = m.history[i];
     if (s.lidar.stamp.step != i + 1 || !std::isfinite(s.lidar.stamp.time_s)) return false;

@@ -893,7 +893,9 @@ TEST_F(HostileInput, BrokenHistories) {
   first_pose.first_pose.x = std::nan("");
   MapSnapshot extra = with_history();  // more steps than the snapshot's
   extra.history.push_back(extra.history.back());
-  ExpectRejected({{}, {nan, odometry, gap, unlabelled, first_pose, extra}, {}});
+  MapSnapshot crowded = with_history();  // more readings in one step than any scan holds
+  crowded.history[1].lidar.landmarks.assign(257, crowded.history[1].lidar.landmarks[0]);
+  ExpectRejected({{}, {nan, odometry, gap, unlabelled, first_pose, extra, crowded}, {}});
 }
 
 TEST_F(HostileInput, StaleAndFutureSteps) {
