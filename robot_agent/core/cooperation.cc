@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <limits>
 #include <tuple>
 #include <utility>
 
@@ -426,8 +425,7 @@ Cooperation::CommonLandmarks Cooperation::MatchSnapshot(const MapSnapshot& m, co
   return out;
 }
 
-void Cooperation::AlignWithSnapshot(const MapSnapshot& m, const FilterEstimate& own, PeerState* sender) {
-  const CommonLandmarks common = MatchSnapshot(m, own, *sender->transform);
+void Cooperation::AlignWithSnapshot(const MapSnapshot& m, const CommonLandmarks& common, PeerState* sender) {
   std::vector<LandmarkPair> pairs;
   for (std::size_t i = 0; i < common.match.size(); ++i) {
     if (common.match[i] < 0) continue;
@@ -442,21 +440,14 @@ std::optional<MapReference::Kinematics> Cooperation::JointKinematics(const MapLa
   if (l.motion == LandmarkMotionKind::kStatic) return MapReference::Kinematics{};
   if (l.motion != LandmarkMotionKind::kUnicycle || (l.v_mps == 0.0 && l.w_radps == 0.0)) return std::nullopt;
   // The filter's (v, w) is a weighted mean over its particles' candidates: the nearest one.
-  const common::KnownKinematics* nearest = nullptr;
-  double best = std::numeric_limits<double>::infinity();
-  for (const auto& k : scenario_.filter.known_kinematics) {
-    const double d = std::abs(k.v_mps - l.v_mps) + std::abs(k.w_radps - l.w_radps);
-    if (d < best) {
-      best = d;
-      nearest = &k;
-    }
-  }
-  if (nearest == nullptr) return std::nullopt;
-  const bool is_static = nearest->v_mps == 0.0 && nearest->w_radps == 0.0;
-  return MapReference::Kinematics{is_static, nearest->v_mps, nearest->w_radps};
+  const int c = NearestKnownKinematics(scenario_.filter.known_kinematics, l.v_mps, l.w_radps);
+  if (c < 0) return std::nullopt;
+  const common::KnownKinematics& k = scenario_.filter.known_kinematics[c];
+  return MapReference::Kinematics{k.v_mps == 0.0 && k.w_radps == 0.0, k.v_mps, k.w_radps};
 }
 
 std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& m, const FilterEstimate& own,
+                                                             const CommonLandmarks& common,
                                                              const TransformEstimate& held) const {
   // Both histories whole and of the same steps.
   if (!JointPossible() || m.history.empty() || own.step != m.header.step || history_.size() != m.history.size()) {
@@ -464,7 +455,6 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
   }
   // Labels: the own tracks as they are; the sender's matched to an own landmark take its label,
   // the others one of their own above every own track.
-  const CommonLandmarks common = MatchSnapshot(m, own, held);
   std::map<int, MapReference::Kinematics> kinematics;
   std::map<int, int> own_label, their_label;  // track -> label
   for (const auto& l : common.mine) {
@@ -554,11 +544,12 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
   PeerState& sender = peers_[m.header.sender];
   if (filter != nullptr) {
     const FilterEstimate own = filter->Estimate();
-    if (const auto joint = JointTransform(m, own, *sender.transform)) {
+    const CommonLandmarks common = MatchSnapshot(m, own, *sender.transform);
+    if (const auto joint = JointTransform(m, own, common, *sender.transform)) {
       HoldTransform(&sender, *joint, m.header.step);
-      ++joint_transforms_;
+      joint_estimates_.push_back({m.header.sender, m.header.step, joint->t, joint->Covariance()});
     } else {
-      AlignWithSnapshot(m, own, &sender);
+      AlignWithSnapshot(m, common, &sender);
     }
   }
   const TransformEstimate& t_self_sender = *sender.transform;

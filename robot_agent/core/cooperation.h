@@ -46,8 +46,9 @@ class Cooperation {
   std::vector<FrameTransform> known_transforms() const;
   std::vector<std::string> frames_known() const;
   int rejected_messages() const;
-  // Transforms estimated jointly from both robots' histories (cooperation.joint_transform).
-  int joint_transforms() const { return joint_transforms_; }
+  // Every transform estimated jointly from both robots' histories (cooperation.joint_transform),
+  // in order: the peer, the snapshot's step, the estimate.
+  const std::vector<FrameTransform>& joint_estimates() const { return joint_estimates_; }
   // Landmark-moved notices accepted so far (the ELA filter will use them).
   int moved_notices() const { return moved_notices_; }
   // Mutual detections used to correct the own pose (cooperative localization).
@@ -101,12 +102,12 @@ class Cooperation {
   CommonLandmarks MatchSnapshot(const MapSnapshot& m, const FilterEstimate& own, const TransformEstimate& held) const;
   // Refines the transform to the snapshot's sender by the landmarks both maps hold (aligned by
   // AlignLandmarks with the held one as prior).
-  void AlignWithSnapshot(const MapSnapshot& m, const FilterEstimate& own, PeerState* sender);
+  void AlignWithSnapshot(const MapSnapshot& m, const CommonLandmarks& common, PeerState* sender);
   // The transform to the snapshot's sender from both robots' histories (the joint MAP estimate
   // of both paths and the landmarks, MapReference), or nothing when either history is missing
   // or the estimate fails or disagrees with the held one beyond transform_gate_probability.
   std::optional<TransformEstimate> JointTransform(const MapSnapshot& m, const FilterEstimate& own,
-                                                  const TransformEstimate& held) const;
+                                                  const CommonLandmarks& common, const TransformEstimate& held) const;
   // Whether the own history can take part in a joint estimate: joint_transform on, the history
   // whole, and landmark kinematics it models (static or known candidates, not a constant turn rate).
   bool JointPossible() const {
@@ -139,7 +140,7 @@ class Cooperation {
   int rejected_ = 0;
   int moved_notices_ = 0;
   int cooperative_updates_ = 0;
-  int joint_transforms_ = 0;
+  std::vector<FrameTransform> joint_estimates_;
   // The own history for the joint estimate: every step from step 1, each landmark detection
   // labelled by its track (unlabelled ones left out); usable while no step is missing, every
   // scan came labelled and it is within max_history_steps.

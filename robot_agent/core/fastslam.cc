@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <map>
 #include <tuple>
 #include <utility>
@@ -779,8 +778,13 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
       StateMatrix<D> cov = StateMatrix<D>::Zero();
       mean.template head<2>() = peer.mean.head<2>();
       cov.template topLeftCorner<2, 2>() = peer.covariance.topLeftCorner<2, 2>();
+      // A landmark the peer takes as static stays static here (constant turn rate): v = w = 0
+      // with no variance, no heading.
+      const bool stationary = D == 5 && peer.motion == LandmarkMotionKind::kStatic;
       if constexpr (D > 2) {
-        if (peer_heading) {
+        if (stationary) {
+          cov(2, 2) = kUnknownHeadingVar;
+        } else if (peer_heading) {
           mean(2) = WrapAngle(peer.mean(2));
           cov.template topLeftCorner<3, 3>() = peer.covariance;
         }
@@ -790,7 +794,7 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
         block->field[Block::kParamW][lane] = peer_heading ? peer.w_radps : 0.0;
       }
       if constexpr (D == 5) {
-        if (peer_heading) {
+        if (peer_heading && !stationary) {
           // The snapshot carries no speed or turn-rate variances: the priors of a new state.
           const double s_max = MaxLandmarkSpeed(filter_);
           mean(3) = peer.v_mps;
@@ -811,21 +815,12 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
       meta.first_seen_step = step_;
       meta.last_seen_step = std::min(step_, peer.last_seen_step);
       meta.sightings = static_cast<std::uint16_t>(std::max(1, filter_.confirm_sightings));
-      // A landmark the peer takes as static stays static here (constant turn rate: no motion
-      // state to start).
-      meta.stationary = D == 5 && peer.motion == LandmarkMotionKind::kStatic;
-      if (meta.stationary) block->Cov(2, 2, lane) = kUnknownHeadingVar;
-      meta.position_only = D > 2 && !peer_heading && !meta.stationary;
+      meta.stationary = stationary;
+      meta.position_only = D > 2 && !peer_heading && !stationary;
       if constexpr (D == 3) {
-        // The known candidate nearest the peer's (v, w).
-        double best = std::numeric_limits<double>::infinity();
-        for (std::size_t c = 0; c < filter_.known_kinematics.size() && peer_heading; ++c) {
-          const double d = std::abs(filter_.known_kinematics[c].v_mps - peer.v_mps) +
-                           std::abs(filter_.known_kinematics[c].w_radps - peer.w_radps);
-          if (d < best) {
-            best = d;
-            meta.candidate = static_cast<std::int8_t>(c);
-          }
+        if (peer_heading) {
+          meta.candidate =
+              static_cast<std::int8_t>(NearestKnownKinematics(filter_.known_kinematics, peer.v_mps, peer.w_radps));
         }
       }
     }

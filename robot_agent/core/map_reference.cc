@@ -24,27 +24,6 @@ using common::WrapAngle;
 // A variance used as a whitening divisor: zero (a noise-free model) becomes a stiff tiny one.
 double Sd(double var) { return std::sqrt(std::max(var, 1e-12)); }
 
-// Appends the rows of one whitened residual block: r (size n) and its Jacobian blocks
-// (n x 3 each, zeros kept: the pattern depends on the structure only) for the variables at the
-// given column offsets (-1: a known quantity, no column).
-struct Rows {
-  std::vector<Eigen::Triplet<double>> jacobian;
-  std::vector<double> residual;
-
-  void Add(const Eigen::VectorXd& r, const std::vector<std::pair<int, Eigen::MatrixXd>>& blocks) {
-    const int row = static_cast<int>(residual.size());
-    for (int i = 0; i < r.size(); ++i) residual.push_back(r(i));
-    for (const auto& [col, j] : blocks) {
-      if (col < 0) continue;
-      for (int i = 0; i < j.rows(); ++i) {
-        for (int c = 0; c < j.cols(); ++c) {
-          jacobian.emplace_back(row + i, col + c, j(i, c));
-        }
-      }
-    }
-  }
-};
-
 // a - b on poses, heading wrapped.
 Eigen::Vector3d Minus(const Pose2& a, const Pose2& b) {
   return {a.x - b.x, a.y - b.y, WrapAngle(a.heading - b.heading)};
@@ -85,6 +64,27 @@ std::vector<MapReference::RobotStart> OracleRobots(const common::ScenarioOptions
 }
 
 }  // namespace
+
+// Appends the rows of one whitened residual block: r (size n) and its Jacobian blocks
+// (n x 3 each, zeros kept: the pattern depends on the structure only) for the variables at the
+// given column offsets (-1: a known quantity, no column).
+struct MapReference::Rows {
+  std::vector<Eigen::Triplet<double>> jacobian;
+  std::vector<double> residual;
+
+  void Add(const Eigen::VectorXd& r, const std::vector<std::pair<int, Eigen::MatrixXd>>& blocks) {
+    const int row = static_cast<int>(residual.size());
+    for (int i = 0; i < r.size(); ++i) residual.push_back(r(i));
+    for (const auto& [col, j] : blocks) {
+      if (col < 0) continue;
+      for (int i = 0; i < j.rows(); ++i) {
+        for (int c = 0; c < j.cols(); ++c) {
+          jacobian.emplace_back(row + i, col + c, j(i, c));
+        }
+      }
+    }
+  }
+};
 
 MapReference::MapReference(const common::ScenarioOptions& options, int robot_index)
     : MapReference(options, std::vector<int>{robot_index}, {}, 0) {}
@@ -210,96 +210,107 @@ Pose2 MapReference::Increment(const Robot& robot, int t, const Eigen::Vector3d& 
   return out;
 }
 
-void MapReference::SolveOnce() {
-  // Columns: every robot's poses (the first robot's from step 1, the others' from their first
-  // pose), then every chain's states in id order, then (if estimated) every robot's correction.
-  const int steps = static_cast<int>(robots_.front().path.size()) - 1;
-  std::vector<int> robot_base(robots_.size());
-  int cols = 0;
+MapReference::Layout MapReference::MakeLayout() const {
+  Layout layout;
+  layout.steps = static_cast<int>(robots_.front().path.size()) - 1;
   for (std::size_t r = 0; r < robots_.size(); ++r) {
-    robot_base[r] = cols;
-    cols += 3 * (r == 0 ? steps : steps + 1);
+    layout.robot_base.push_back(layout.cols);
+    layout.cols += 3 * (r == 0 ? layout.steps : layout.steps + 1);
   }
-  std::map<int, int> chain_col;
   for (const auto& [id, chain] : chains_) {
-    chain_col[id] = cols;
-    cols += 3 * static_cast<int>(chain.states.size());
+    layout.chain_col[id] = layout.cols;
+    layout.cols += 3 * static_cast<int>(chain.states.size());
   }
-  const int correction_base = cols;
-  if (estimate_calibration_) cols += 3 * static_cast<int>(robots_.size());
-  auto correction_col = [&](int r) { return estimate_calibration_ ? correction_base + 3 * r : -1; };
+  if (estimate_calibration_) {
+    layout.correction_base = layout.cols;
+    layout.cols += 3 * static_cast<int>(robots_.size());
+  }
+  return layout;
+}
+
+int MapReference::Layout::RobotCol(int r, int t) const {
+  if (r == 0) return t == 0 ? -1 : robot_base[0] + 3 * (t - 1);
+  return robot_base[r] + 3 * t;
+}
+
+void MapReference::BuildRows(const Layout& layout, Rows* rows) const {
   const Eigen::Vector3d correction_prior(1.0, 1.0, 0.0);
   const Eigen::Vector3d correction_w(1.0 / 0.1, 1.0 / 0.1, 1.0 / 0.05);
-  auto robot_col = [&](int r, int t) {
-    if (r == 0) return t == 0 ? -1 : robot_base[0] + 3 * (t - 1);
-    return robot_base[r] + 3 * t;
-  };
   const Eigen::Vector3d robot_w = robot_var_.unaryExpr(&Sd).cwiseInverse();
   const Eigen::Vector3d landmark_w = landmark_var_.unaryExpr(&Sd).cwiseInverse();
   const Eigen::Vector2d z_w(1.0 / Sd(var_r_), 1.0 / Sd(var_b_));
-
-  auto build = [&](Rows* rows) {
-    for (std::size_t r = 0; r < robots_.size(); ++r) {
-      const Robot& robot = robots_[r];
-      const int ri = static_cast<int>(r);
-      for (int t = 1; t <= steps; ++t) {
-        const Pose2 increment = Increment(robot, t, robot.correction);
-        const Pose2& previous = robot.path[t - 1];
-        const Eigen::Vector3d res = robot_w.asDiagonal() * Minus(robot.path[t], common::Compose(previous, increment));
-        const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
-        // d increment / d correction by central differences; then through the composition.
-        Eigen::Matrix3d jc = Eigen::Matrix3d::Zero();
-        if (estimate_calibration_) {
-          constexpr double kH = 1e-6;
-          for (int c = 0; c < 3; ++c) {
-            Eigen::Vector3d d = Eigen::Vector3d::Zero();
-            d(c) = kH;
-            jc.col(c) = Minus(Increment(robot, t, robot.correction + d), Increment(robot, t, robot.correction - d)) /
-                        (2.0 * kH);
-          }
-          jc = -(robot_w.asDiagonal() * common::ComposeJacobianRight(previous, increment) * jc);
-        }
-        rows->Add(res, {{robot_col(ri, t), Eigen::MatrixXd(robot_w.asDiagonal())},
-                        {robot_col(ri, t - 1), jf},
-                        {correction_col(ri), jc}});
-      }
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    const Robot& robot = robots_[r];
+    const int ri = static_cast<int>(r);
+    for (int t = 1; t <= layout.steps; ++t) {
+      const Pose2 increment = Increment(robot, t, robot.correction);
+      const Pose2& previous = robot.path[t - 1];
+      const Eigen::Vector3d res = robot_w.asDiagonal() * Minus(robot.path[t], common::Compose(previous, increment));
+      const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
+      // d increment / d correction by central differences; then through the composition.
+      Eigen::Matrix3d jc = Eigen::Matrix3d::Zero();
       if (estimate_calibration_) {
-        rows->Add(correction_w.asDiagonal() * (correction_prior - robot.correction),
-                  {{correction_col(ri), -Eigen::MatrixXd(correction_w.asDiagonal())}});
+        constexpr double kH = 1e-6;
+        for (int c = 0; c < 3; ++c) {
+          Eigen::Vector3d d = Eigen::Vector3d::Zero();
+          d(c) = kH;
+          jc.col(c) =
+              Minus(Increment(robot, t, robot.correction + d), Increment(robot, t, robot.correction - d)) / (2.0 * kH);
+        }
+        jc = -(robot_w.asDiagonal() * common::ComposeJacobianRight(previous, increment) * jc);
       }
+      rows->Add(res, {{layout.RobotCol(ri, t), Eigen::MatrixXd(robot_w.asDiagonal())},
+                      {layout.RobotCol(ri, t - 1), jf},
+                      {layout.CorrectionCol(ri), jc}});
     }
-    for (const auto& [id, chain] : chains_) {
-      const int base = chain_col[id];
-      // A weak prior on the first heading keeps it defined before it is observable.
-      Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(1, 3);
-      prior(0, 2) = 1e-3;
-      rows->Add(Eigen::VectorXd::Zero(1), {{base, prior}});
-      // A unicycle step is a composition with a fixed increment (a static landmark has one state).
-      const Pose2 increment = StepLandmark(Pose2{}, chain.kinematics);
-      const Eigen::Vector3d& w = landmark_w;
-      for (std::size_t i = 1; i < chain.states.size(); ++i) {
-        const Pose2& previous = chain.states[i - 1];
-        const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], common::Compose(previous, increment));
-        const Eigen::Matrix3d jf = -(w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
-        const int col = base + 3 * static_cast<int>(i);
-        rows->Add(res, {{col, Eigen::MatrixXd(w.asDiagonal())}, {col - 3, jf}});
-      }
+    if (estimate_calibration_) {
+      rows->Add(correction_w.asDiagonal() * (correction_prior - robot.correction),
+                {{layout.CorrectionCol(ri), -Eigen::MatrixXd(correction_w.asDiagonal())}});
     }
-    for (const Reading& z : readings_) {
-      if (!z.inlier) continue;
-      const Pose2& x = robots_[z.robot].path[z.step];
-      const Eigen::Vector2d p = Target(z);
-      const int target_col = z.landmark_id >= 0
-                                 ? chain_col[z.landmark_id] + 3 * StateIndex(chains_.at(z.landmark_id), z.step)
-                                 : robot_col(z.seen, z.step);
-      const Eigen::Vector2d res = WhitenedResidual(z);
-      // Jacobians of the residual (z - h): -dh.
-      const Eigen::MatrixXd jx = -MeasurementJacobianPose(p, x);
-      Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, 3);
-      jp.leftCols<2>() = -MeasurementJacobianLandmark(p, x);
-      rows->Add(res, {{robot_col(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
+  }
+  for (const auto& [id, chain] : chains_) {
+    const int base = layout.chain_col.at(id);
+    // A weak prior on the first heading keeps it defined before it is observable.
+    Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(1, 3);
+    prior(0, 2) = 1e-3;
+    rows->Add(Eigen::VectorXd::Zero(1), {{base, prior}});
+    // A unicycle step is a composition with a fixed increment (a static landmark has one state).
+    const Pose2 increment = StepLandmark(Pose2{}, chain.kinematics);
+    const Eigen::Vector3d& w = landmark_w;
+    for (std::size_t i = 1; i < chain.states.size(); ++i) {
+      const Pose2& previous = chain.states[i - 1];
+      const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], common::Compose(previous, increment));
+      const Eigen::Matrix3d jf = -(w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
+      const int col = base + 3 * static_cast<int>(i);
+      rows->Add(res, {{col, Eigen::MatrixXd(w.asDiagonal())}, {col - 3, jf}});
     }
-  };
+  }
+  for (const Reading& z : readings_) {
+    if (!z.inlier) continue;
+    const Pose2& x = robots_[z.robot].path[z.step];
+    const Eigen::Vector2d p = Target(z);
+    const int target_col = z.landmark_id >= 0
+                               ? layout.chain_col.at(z.landmark_id) + 3 * StateIndex(chains_.at(z.landmark_id), z.step)
+                               : layout.RobotCol(z.seen, z.step);
+    const Eigen::Vector2d res = WhitenedResidual(z);
+    // Jacobians of the residual (z - h): -dh.
+    const Eigen::MatrixXd jx = -MeasurementJacobianPose(p, x);
+    Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, 3);
+    jp.leftCols<2>() = -MeasurementJacobianLandmark(p, x);
+    rows->Add(res, {{layout.RobotCol(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
+  }
+}
+
+Eigen::SparseMatrix<double> MapReference::Jacobian(const Layout& layout, Rows* rows) const {
+  BuildRows(layout, rows);
+  Eigen::SparseMatrix<double> j(static_cast<int>(rows->residual.size()), layout.cols);
+  j.setFromTriplets(rows->jacobian.begin(), rows->jacobian.end());
+  return j;
+}
+
+void MapReference::SolveOnce() {
+  const Layout layout = MakeLayout();
+  const int cols = layout.cols;
   auto cost = [](const Rows& rows) {
     double c = 0.0;
     for (const double r : rows.residual) c += r * r;
@@ -307,19 +318,19 @@ void MapReference::SolveOnce() {
   };
   auto apply = [&](const Eigen::VectorXd& delta, double sign) {
     for (std::size_t r = 0; r < robots_.size(); ++r) {
-      for (int t = r == 0 ? 1 : 0; t <= steps; ++t) {
+      for (int t = r == 0 ? 1 : 0; t <= layout.steps; ++t) {
         Pose2& x = robots_[r].path[t];
-        x = Pose2::FromVector(x.Vector() + sign * delta.segment<3>(robot_col(static_cast<int>(r), t)));
+        x = Pose2::FromVector(x.Vector() + sign * delta.segment<3>(layout.RobotCol(static_cast<int>(r), t)));
       }
     }
     for (auto& [id, chain] : chains_) {
       for (std::size_t i = 0; i < chain.states.size(); ++i) {
-        const int col = chain_col[id] + 3 * static_cast<int>(i);
+        const int col = layout.chain_col.at(id) + 3 * static_cast<int>(i);
         chain.states[i] = Pose2::FromVector(chain.states[i].Vector() + sign * delta.segment<3>(col));
       }
     }
     for (std::size_t r = 0; r < robots_.size() && estimate_calibration_; ++r) {
-      robots_[r].correction += sign * delta.segment<3>(correction_col(static_cast<int>(r)));
+      robots_[r].correction += sign * delta.segment<3>(layout.CorrectionCol(static_cast<int>(r)));
     }
   };
   double lambda = 1e-6;
@@ -328,10 +339,8 @@ void MapReference::SolveOnce() {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   for (int iteration = 0; iteration < 30; ++iteration) {
     Rows rows;
-    build(&rows);
+    const Eigen::SparseMatrix<double> j = Jacobian(layout, &rows);
     const double before = cost(rows);
-    Eigen::SparseMatrix<double> j(static_cast<int>(rows.residual.size()), cols);
-    j.setFromTriplets(rows.jacobian.begin(), rows.jacobian.end());
     const Eigen::Map<const Eigen::VectorXd> r(rows.residual.data(), static_cast<int>(rows.residual.size()));
     Eigen::SparseMatrix<double> h = j.transpose() * j;
     const Eigen::VectorXd g = j.transpose() * r;
@@ -344,7 +353,7 @@ void MapReference::SolveOnce() {
     if (solver.info() != Eigen::Success || !delta.allFinite()) break;
     apply(delta, 1.0);
     Rows after_rows;
-    build(&after_rows);
+    BuildRows(layout, &after_rows);
     const double after = cost(after_rows);
     if (after > before) {
       apply(delta, -1.0);
@@ -355,24 +364,23 @@ void MapReference::SolveOnce() {
     lambda = std::max(lambda / 10.0, 1e-9);
     if (delta.cwiseAbs().maxCoeff() < 1e-7) break;
   }
-  if (robots_.size() < 2) return;
-  // The first-pose covariances of the robots placed by the data: blocks of (J^T J)^-1 at the
-  // solution.
+}
+
+Eigen::Matrix3d MapReference::FirstPoseCovariance(int r) const {
+  if (r < 1 || r >= static_cast<int>(robots_.size())) throw std::out_of_range("no robot placed by the data there");
+  // The block of (J^T J)^-1 at the current solution.
+  const Layout layout = MakeLayout();
   Rows rows;
-  build(&rows);
-  Eigen::SparseMatrix<double> j(static_cast<int>(rows.residual.size()), cols);
-  j.setFromTriplets(rows.jacobian.begin(), rows.jacobian.end());
+  const Eigen::SparseMatrix<double> j = Jacobian(layout, &rows);
   const Eigen::SparseMatrix<double> h = j.transpose() * j;
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(h);
-  for (std::size_t r = 1; r < robots_.size(); ++r) {
-    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(cols, 3);
-    const int col = robot_col(static_cast<int>(r), 0);
-    e.block<3, 3>(col, 0).setIdentity();
-    const Eigen::MatrixXd x = information.solve(e);
-    const bool ok = information.info() == Eigen::Success && x.allFinite();
-    robots_[r].first_pose_covariance = ok ? Eigen::Matrix3d(x.block<3, 3>(col, 0))
-                                          : Eigen::Matrix3d::Constant(std::numeric_limits<double>::infinity());
-  }
+  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, 3);
+  const int col = layout.RobotCol(r, 0);
+  e.block<3, 3>(col, 0).setIdentity();
+  const Eigen::MatrixXd x = information.solve(e);
+  const bool ok = information.info() == Eigen::Success && x.allFinite();
+  return ok ? Eigen::Matrix3d(x.block<3, 3>(col, 0))
+            : Eigen::Matrix3d::Constant(std::numeric_limits<double>::infinity());
 }
 
 std::vector<std::pair<Eigen::Vector2d, int>> MapReference::Landmarks() const {

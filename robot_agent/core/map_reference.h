@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
@@ -91,9 +92,10 @@ class MapReference {
   // Robot r of the set (0: the first): its current pose and its first pose, in the frame.
   const common::Pose2& Pose(int r = 0) const { return robots_.at(r).path.back(); }
   const common::Pose2& FirstPose(int r) const { return robots_.at(r).path.front(); }
-  // Robot r's (r >= 1) first-pose covariance at the last solution: the block of the inverse of
-  // the Gauss-Newton information J^T J (the Laplace approximation of the posterior).
-  const Eigen::Matrix3d& FirstPoseCovariance(int r) const { return robots_.at(r).first_pose_covariance; }
+  // Robot r's (r >= 1) first-pose covariance at the current solution: the block of the inverse
+  // of the Gauss-Newton information J^T J (the Laplace approximation of the posterior),
+  // computed when asked.
+  Eigen::Matrix3d FirstPoseCovariance(int r) const;
   // Robot r's every pose, from its first (step 0) to the last step added.
   const std::vector<common::Pose2>& Path(int r) const { return robots_.at(r).path; }
   // The current position of every landmark seen so far, with its identity.
@@ -113,7 +115,6 @@ class MapReference {
     // motion[t - 1]: step t's calibrated odometry segments.
     std::vector<std::vector<OdometryCalibration::Motion>> motion;
     Eigen::Vector3d correction{1.0, 1.0, 0.0};  // (s_v, s_w, b_w)
-    Eigen::Matrix3d first_pose_covariance = Eigen::Matrix3d::Zero();
   };
   // Step t's motion in the robot's frame under `correction`: x_t = Compose(x_{t-1}, increment)
   // (a unicycle step is one), the corrected segments composed.
@@ -131,6 +132,21 @@ class MapReference {
   static int StateIndex(const Chain& chain, int t);  // of a landmark's state at step t
   // Gauss-Newton with Levenberg damping over the inlying readings.
   void SolveOnce();
+  // The unknowns' columns: every robot's poses (the first robot's from step 1, the others' from
+  // their first pose), then every chain's states in id order, then (if estimated) every robot's
+  // correction.
+  struct Layout {
+    int steps = 0, cols = 0, correction_base = -1;
+    std::vector<int> robot_base;
+    std::map<int, int> chain_col;      // by landmark id
+    int RobotCol(int r, int t) const;  // -1: the first robot's first pose, known
+    int CorrectionCol(int r) const { return correction_base < 0 ? -1 : correction_base + 3 * r; }
+  };
+  Layout MakeLayout() const;
+  // The whitened residual rows of every factor at the current estimate, and their Jacobian.
+  struct Rows;
+  void BuildRows(const Layout& layout, Rows* rows) const;
+  Eigen::SparseMatrix<double> Jacobian(const Layout& layout, Rows* rows) const;
   // A reading's target (landmark or robot position) and its residual z - h, whitened, at the
   // current solution.
   Eigen::Vector2d Target(const Reading& z) const;

@@ -97,6 +97,10 @@ class SlamFilter {
 // The robot's initial pose in its own frame G_i: inverse(frame_in_world) * initial_pose.
 common::Pose2 InitialPoseInOwnFrame(const common::RobotOptions& robot);
 
+// The index of the known kinematics nearest (v, w) (|dv| + |dw|; the first of equals), or -1
+// when there are none: which candidate a landmark reported with (v, w) follows.
+int NearestKnownKinematics(const std::vector<common::KnownKinematics>& candidates, double v_mps, double w_radps);
+
 // Creates the filter the scenario asks for (options.filter.type), for robot robot_id, with a
 // random stream derived from (seed, robot_id). Returns nullptr for an unknown type.
 std::unique_ptr<SlamFilter> CreateFilter(const common::ScenarioOptions& options, const std::string& robot_id,

@@ -216,18 +216,16 @@ struct AgentNode::Impl {
     if (auto it = inbox.find(k - 1); it != inbox.end()) {
       SortBySender(&it->second);
       const int before = cooperation.rejected_messages();
-      const int joint_before = cooperation.joint_transforms();
+      const std::size_t joint_before = cooperation.joint_estimates().size();
       cooperation.Receive(it->second, filter.get());
       if (const int bad = cooperation.rejected_messages() - before; bad > 0) {
         counters.rejected_samples += bad;
         spdlog::warn("rejected {} peer message(s) of step {}", bad, k - 1);
       }
-      if (cooperation.joint_transforms() > joint_before) {
-        for (const auto& t : cooperation.known_transforms()) {
-          if (t.step != k - 1) continue;
-          spdlog::info("joint transform from both histories at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)",
-                       t.step, options.robot_id, t.peer, t.t_self_peer.x, t.t_self_peer.y, t.t_self_peer.heading);
-        }
+      for (std::size_t i = joint_before; i < cooperation.joint_estimates().size(); ++i) {
+        const auto& t = cooperation.joint_estimates()[i];
+        spdlog::info("joint transform from both histories at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)",
+                     t.step, options.robot_id, t.peer, t.t_self_peer.x, t.t_self_peer.y, t.t_self_peer.heading);
       }
       inbox.erase(it);
     }

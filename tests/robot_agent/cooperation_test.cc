@@ -1097,7 +1097,8 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   in[1].covariance = Eigen::Vector3d(2.1, 2.1, 3.0).asDiagonal();  // sd sqrt(4.2) > 2 m
   in[1].motion = kind;
   in[2].mean = {still.x(), still.y(), 0.0};
-  in[2].covariance = Eigen::Vector3d(1.9, 1.9, 3.0).asDiagonal();
+  in[2].covariance = Eigen::Vector3d(1.9, 1.9, 0.01).asDiagonal();
+  in[2].v_mps = 0.3;  // a static report whose mixture still carries a heading and a speed
   in[2].motion = LandmarkMotionKind::kStatic;
   EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999), 2);
   EXPECT_EQ(count_near(filter_->Estimate(), far), 1);

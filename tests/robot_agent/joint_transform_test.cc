@@ -49,10 +49,10 @@ Outcome RunToTheFirstJointEstimate(const common::ScenarioOptions& o) {
       next[1 - i] = std::move(sent);
     }
     for (int i = 0; i < 2; ++i) inbox[i] = std::move(next[i]);
-    if (agents[0].joint_transforms() > 0 && agents[1].joint_transforms() > 0) break;
+    if (!agents[0].joint_estimates().empty() && !agents[1].joint_estimates().empty()) break;
   }
   for (int i = 0; i < 2; ++i) {
-    out.joint[i] = agents[i].joint_transforms();
+    out.joint[i] = static_cast<int>(agents[i].joint_estimates().size());
     for (const auto& t : agents[i].known_transforms()) {
       if (t.peer == ids[1 - i]) out.held[i] = t;
     }
