@@ -72,9 +72,10 @@ inline Double2 Min(Double2 a, Double2 b) { return Select(a < b, a, b); }
 using Double4 = double __attribute__((vector_size(32)));
 using Mask4 = long __attribute__((vector_size(32)));  // NOLINT(runtime/int): the mask type
 MRSLAM_LANE_INLINE Double4 Select(Mask4 c, Double4 a, Double4 b) { return c ? a : b; }
-MRSLAM_LANE_INLINE Double4 Sqrt(Double4 x) {  // two SSE2 square roots (no AVX intrinsic here)
-  const Double2 lo = _mm_sqrt_pd(Double2{x[0], x[1]}), hi = _mm_sqrt_pd(Double2{x[2], x[3]});
-  return Double4{lo[0], lo[1], hi[0], hi[1]};
+MRSLAM_LANE_INLINE Double4 Sqrt(Double4 x) {  // vsqrtpd by hand: the intrinsic needs an AVX caller
+  Double4 r;
+  asm("vsqrtpd %1, %0" : "=x"(r) : "x"(x));
+  return r;
 }
 MRSLAM_LANE_INLINE Double4 Abs(Double4 x) { return Select(x < 0.0, -x, x); }
 MRSLAM_LANE_INLINE Double4 Max(Double4 a, Double4 b) { return Select(a > b, a, b); }
@@ -83,10 +84,10 @@ MRSLAM_LANE_INLINE Double4 Min(Double4 a, Double4 b) { return Select(a < b, a, b
 using Double8 = double __attribute__((vector_size(64)));
 using Mask8 = long __attribute__((vector_size(64)));  // NOLINT(runtime/int): the mask type
 MRSLAM_LANE_INLINE Double8 Select(Mask8 c, Double8 a, Double8 b) { return c ? a : b; }
-MRSLAM_LANE_INLINE Double8 Sqrt(Double8 x) {  // four SSE2 square roots, as for Double4
-  const Double2 a = _mm_sqrt_pd(Double2{x[0], x[1]}), b = _mm_sqrt_pd(Double2{x[2], x[3]});
-  const Double2 c = _mm_sqrt_pd(Double2{x[4], x[5]}), d = _mm_sqrt_pd(Double2{x[6], x[7]});
-  return Double8{a[0], a[1], b[0], b[1], c[0], c[1], d[0], d[1]};
+MRSLAM_LANE_INLINE Double8 Sqrt(Double8 x) {  // likewise
+  Double8 r;
+  asm("vsqrtpd %1, %0" : "=v"(r) : "v"(x));
+  return r;
 }
 MRSLAM_LANE_INLINE Double8 Abs(Double8 x) { return Select(x < 0.0, -x, x); }
 MRSLAM_LANE_INLINE Double8 Max(Double8 a, Double8 b) { return Select(a > b, a, b); }
