@@ -72,10 +72,18 @@ inline Double2 Min(Double2 a, Double2 b) { return Select(a < b, a, b); }
 using Double4 = double __attribute__((vector_size(32)));
 using Mask4 = long __attribute__((vector_size(32)));  // NOLINT(runtime/int): the mask type
 MRSLAM_LANE_INLINE Double4 Select(Mask4 c, Double4 a, Double4 b) { return c ? a : b; }
-MRSLAM_LANE_INLINE Double4 Sqrt(Double4 x) {  // vsqrtpd by hand: the intrinsic needs an AVX caller
+// One vsqrtpd per vector, written by hand: the intrinsic needs a caller compiled for AVX, and the
+// generic lane maths between it and the kernel is not. Clang checks the register's width where
+// the asm stands, so there (and for clang-tidy) the square roots are SSE2 ones, two per Double4.
+MRSLAM_LANE_INLINE Double4 Sqrt(Double4 x) {
+#if defined(__clang__)
+  const Double2 lo = _mm_sqrt_pd(Double2{x[0], x[1]}), hi = _mm_sqrt_pd(Double2{x[2], x[3]});
+  return Double4{lo[0], lo[1], hi[0], hi[1]};
+#else
   Double4 r;
   asm("vsqrtpd %1, %0" : "=x"(r) : "x"(x));
   return r;
+#endif
 }
 MRSLAM_LANE_INLINE Double4 Abs(Double4 x) { return Select(x < 0.0, -x, x); }
 MRSLAM_LANE_INLINE Double4 Max(Double4 a, Double4 b) { return Select(a > b, a, b); }
@@ -85,9 +93,14 @@ using Double8 = double __attribute__((vector_size(64)));
 using Mask8 = long __attribute__((vector_size(64)));  // NOLINT(runtime/int): the mask type
 MRSLAM_LANE_INLINE Double8 Select(Mask8 c, Double8 a, Double8 b) { return c ? a : b; }
 MRSLAM_LANE_INLINE Double8 Sqrt(Double8 x) {  // likewise
+#if defined(__clang__)
+  const Double4 lo = Sqrt(Double4{x[0], x[1], x[2], x[3]}), hi = Sqrt(Double4{x[4], x[5], x[6], x[7]});
+  return Double8{lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]};
+#else
   Double8 r;
   asm("vsqrtpd %1, %0" : "=v"(r) : "v"(x));
   return r;
+#endif
 }
 MRSLAM_LANE_INLINE Double8 Abs(Double8 x) { return Select(x < 0.0, -x, x); }
 MRSLAM_LANE_INLINE Double8 Max(Double8 a, Double8 b) { return Select(a > b, a, b); }
