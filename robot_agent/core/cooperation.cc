@@ -73,7 +73,6 @@
 namespace mrslam::robot_agent {
 namespace {
 
-constexpr int kEncounterRefineSteps = 10;        // DESIGN.md: an encounter is scored after 10 steps
 constexpr std::uint32_t kShareFramesSteps = 10;  // a long encounter passes on the frames known this often
 constexpr std::size_t kMaxHistory = 64;          // bound of each per-peer detection history
 constexpr double kCovarianceFloor = 1e-10;       // added to a sent pose covariance (1 particle: 0)

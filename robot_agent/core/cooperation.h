@@ -41,6 +41,10 @@ class Cooperation {
   std::vector<LandmarkMovedNotice> MovedNotices(const std::vector<MovedLandmark>& moved, std::uint32_t step,
                                                 double time_s) const;
 
+  // The transform of a rendezvous is refined over its encounter's first steps (DESIGN.md: it is
+  // scored after 10), then held as it is in rendezvous().
+  static constexpr int kEncounterRefineSteps = 10;
+
   // Every rendezvous so far (for the estimate stream and the log), and the frames known.
   const std::vector<RendezvousEvent>& rendezvous() const;
   std::vector<FrameTransform> known_transforms() const;

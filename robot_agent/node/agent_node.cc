@@ -56,6 +56,7 @@ struct AgentNode::Impl {
   std::map<std::string, std::uint32_t> sent_sequence;
   AgentCounters counters;
   std::uint32_t next_step = 1;
+  std::size_t rendezvous_logged = 0;  // rendezvous() entries logged so far
   // Samples buffered by step until the step is complete.
   std::map<std::uint32_t, common::LidarScan> lidar;
   std::map<std::uint32_t, common::ImuSamples> imu;
@@ -207,6 +208,22 @@ struct AgentNode::Impl {
     std::sort(in->moved.begin(), in->moved.end(), order);
   }
 
+  // Logs each rendezvous once its transform is settled (the encounter's refinement steps are
+  // over) or the run ends.
+  void LogRendezvous(std::uint32_t step, bool last) {
+    const auto& events = cooperation.rendezvous();
+    for (; rendezvous_logged < events.size(); ++rendezvous_logged) {
+      const RendezvousEvent& e = events[rendezvous_logged];
+      if (!last && step <= e.step + Cooperation::kEncounterRefineSteps) return;
+      const Eigen::Vector3d sd = e.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+      spdlog::info(
+          "rendezvous with {} at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad), sd ({:.3f} m, {:.3f} m, "
+          "{:.4f} rad)",
+          e.peer, e.step, options.robot_id, e.peer, e.t_self_peer.x, e.t_self_peer.y, e.t_self_peer.heading, sd(0),
+          sd(1), sd(2));
+    }
+  }
+
   // Processes the next step if all of it is here. Returns true if it did.
   bool TryProcess(bool* last) {
     const std::uint32_t k = next_step;
@@ -238,15 +255,10 @@ struct AgentNode::Impl {
     clock.erase(k);
     filter->Process(step);
     const FilterEstimate estimate = filter->Estimate();
-    const std::size_t rendezvous_before = cooperation.rendezvous().size();
     PeerOutbox outbox = cooperation.AfterStep(step, estimate);
     outbox.moved = cooperation.MovedNotices(filter->TakeMovedLandmarks(), k, time_s);
     const auto sent = Send(std::move(outbox));
-    for (std::size_t i = rendezvous_before; i < cooperation.rendezvous().size(); ++i) {
-      const auto& e = cooperation.rendezvous()[i];
-      spdlog::info("rendezvous with {} at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)", e.peer, e.step,
-                   options.robot_id, e.peer, e.t_self_peer.x, e.t_self_peer.y, e.t_self_peer.heading);
-    }
+    LogRendezvous(k, *last);
     msg::Estimate m = ToMsg(estimate, options.robot_id, scenario.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
     m.frames_known(cooperation.frames_known());

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <map>
 
+#include <fmt/format.h>
+
 #include "common/config/scenario_options.h"
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
@@ -52,15 +54,24 @@ TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
   }
   for (const auto& r : scenario.robots) {
     std::vector<std::uint32_t> steps;
-    msg::Estimate e;
+    msg::Estimate e, last;
     while (readers[r.id]->Take(&e, milliseconds(500))) {
       steps.push_back(e.stamp().step());
       EXPECT_EQ(e.stamp().robot_id(), r.id);
       EXPECT_TRUE(std::isfinite(e.pose().x_m()) && std::isfinite(e.pose().y_m()));
       EXPECT_EQ(e.filter(), "fastslam");
+      last = e;
     }
     ASSERT_EQ(steps.size(), static_cast<std::size_t>(scenario.run.steps)) << r.id;
     for (std::size_t k = 0; k < steps.size(); ++k) EXPECT_EQ(steps[k], k + 1) << r.id;
+    // Every rendezvous of the estimate stream is in the agent's log too.
+    ASSERT_FALSE(last.rendezvous().empty()) << r.id;
+    const std::string log = testing::ReadFile(dir + "/" + r.id + ".log");
+    for (const auto& ev : last.rendezvous()) {
+      EXPECT_THAT(log, ::testing::HasSubstr(fmt::format("rendezvous with {} at step {}: T({} <- {}) = (", ev.peer_id(),
+                                                        ev.step(), r.id, ev.peer_id())))
+          << r.id;
+    }
   }
 }
 
