@@ -390,6 +390,7 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
                                              {"average", MapFusionRule::kAverage}});
     d.merge_maps = c.Get("merge_maps", d.merge_maps);
     d.max_snapshot_landmarks = c.Get("max_snapshot_landmarks", d.max_snapshot_landmarks);
+    d.min_seen_span_steps = c.Get("min_seen_span_steps", d.min_seen_span_steps);
     d.cooperative_localization = c.Get("cooperative_localization", d.cooperative_localization);
     d.match_gate_probability = c.Get("match_gate_probability", d.match_gate_probability);
     d.transform_gate_probability = c.Get("transform_gate_probability", d.transform_gate_probability);
@@ -621,6 +622,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
   const auto& co = cooperation;
   c.Check(co.max_snapshot_landmarks >= 1 && co.max_snapshot_landmarks <= 100000, "cooperation.max_snapshot_landmarks",
           co.max_snapshot_landmarks, "must be in 1..100000");
+  c.Check(co.min_seen_span_steps >= 0, "cooperation.min_seen_span_steps", co.min_seen_span_steps,
+          "must not be negative");
   c.Check(co.match_gate_probability > 0.0 && co.match_gate_probability < 1.0, "cooperation.match_gate_probability",
           co.match_gate_probability, "must be in (0, 1)");
   c.Check(co.transform_gate_probability > 0.0 && co.transform_gate_probability < 1.0,

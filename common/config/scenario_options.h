@@ -210,8 +210,12 @@ enum class MapFusionRule { kCovarianceIntersection, kWeighted, kAverage };
 // merging, cooperative localization.
 struct CooperationOptions {
   MapFusionRule map_fusion = MapFusionRule::kCovarianceIntersection;
-  bool merge_maps = true;                 // send snapshots at a rendezvous and merge received ones
-  int max_snapshot_landmarks = 256;       // size bound of a snapshot; larger ones are rejected
+  bool merge_maps = true;            // send snapshots at a rendezvous and merge received ones
+  int max_snapshot_landmarks = 256;  // size bound of a snapshot; larger ones are rejected
+  // A landmark of the own map is shared once it has been seen over at least this many steps
+  // (first to last sighting): a slow mover that the filter briefly took as static, and then lost,
+  // stays out of the peers' maps, where no robot would see it gone.
+  int min_seen_span_steps = 6;
   bool cooperative_localization = false;  // mutual detections also correct the own pose
   double match_gate_probability = 0.999;  // chi-square 2 dof gate, peer vs own landmark
   // A mutual detection whose transform disagrees with the one held beyond this chi-square 3 dof

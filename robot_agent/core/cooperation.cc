@@ -88,17 +88,24 @@ bool ValidTransform(const FrameTransform& t) {
   return Finite(t.t_self_peer) && common::IsSymmetricPositiveDefinite<3>(t.covariance);
 }
 
-// The landmarks a snapshot carries: the confirmed ones of the estimate, the most recently seen
-// first when the bound cuts. The alignment selects the own map the same way, so that both sides
-// of a rendezvous align the same two sets of landmarks.
-std::vector<MapLandmark> SnapshotLandmarks(const FilterEstimate& estimate, int max_landmarks) {
+// The landmarks a snapshot carries: the confirmed ones of the estimate, those of the own robot
+// (self_index) only once seen over min_span steps, the most recently seen first when the bound
+// cuts. The alignment selects the own map the same way, so that both sides of a rendezvous align
+// the same two sets of landmarks.
+std::vector<MapLandmark> SnapshotLandmarks(const FilterEstimate& estimate, int self_index,
+                                           const common::CooperationOptions& options) {
   std::vector<const MapLandmark*> confirmed;
   for (const auto& l : estimate.landmarks) {
-    if (!l.tentative && ValidLandmark(l)) confirmed.push_back(&l);
+    const bool seen_long =
+        l.origin_robot != self_index ||
+        l.last_seen_step >= l.first_seen_step + static_cast<std::uint32_t>(options.min_seen_span_steps);
+    if (!l.tentative && seen_long && ValidLandmark(l)) confirmed.push_back(&l);
   }
   std::stable_sort(confirmed.begin(), confirmed.end(),
                    [](const MapLandmark* a, const MapLandmark* b) { return a->last_seen_step > b->last_seen_step; });
-  if (confirmed.size() > static_cast<std::size_t>(max_landmarks)) confirmed.resize(max_landmarks);
+  if (confirmed.size() > static_cast<std::size_t>(options.max_snapshot_landmarks)) {
+    confirmed.resize(options.max_snapshot_landmarks);
+  }
   std::vector<MapLandmark> out;
   out.reserve(confirmed.size());
   for (const MapLandmark* l : confirmed) out.push_back(*l);
@@ -409,7 +416,7 @@ Cooperation::CommonLandmarks Cooperation::MatchSnapshot(const MapSnapshot& m, co
   const Eigen::Matrix3d t_cov = held.Covariance();
   CommonLandmarks out;
   std::vector<MatchCandidate> mine_c, theirs_c;
-  for (const auto& l : SnapshotLandmarks(own, scenario_.cooperation.max_snapshot_landmarks)) {
+  for (const auto& l : SnapshotLandmarks(own, self_index_, scenario_.cooperation)) {
     if ((!same_step && l.moving) || l.origin_robot == sender_index) continue;
     out.mine.push_back(l);
     mine_c.push_back(Candidate(l));
@@ -585,7 +592,7 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
 MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const FilterEstimate& estimate, bool with_map) const {
   MapSnapshot m;
   m.header = {robot_id_, peer, estimate.step, estimate.time_s, 0};
-  if (with_map) m.landmarks = SnapshotLandmarks(estimate, scenario_.cooperation.max_snapshot_landmarks);
+  if (with_map) m.landmarks = SnapshotLandmarks(estimate, self_index_, scenario_.cooperation);
   if (with_map && JointPossible()) {
     m.first_pose = first_pose_;
     m.history = history_;

@@ -208,6 +208,7 @@ void EkfSlam::AddLandmark(const Detection& det, std::uint32_t track_id, int land
   slot.landmark_id = landmark_id;
   slot.origin_robot = origin_robot;
   slot.origin_track = origin_track;
+  slot.first_seen_step = step_;
   slot.last_seen_step = step_;
   slot.moving = moving;
   if (moving) slot.probation_sightings.push_back(SensorSighting(det));
@@ -228,6 +229,7 @@ void EkfSlam::AppendIndependent(const Eigen::Vector2d& mean, const Eigen::Matrix
   slot.landmark_id = peer.landmark_id;
   slot.origin_robot = peer.origin_robot;
   slot.origin_track = peer.origin_track;
+  slot.first_seen_step = step_;
   slot.last_seen_step = step_;
   slots_.push_back(slot);
 }
@@ -512,6 +514,7 @@ FilterEstimate EkfSlam::Estimate() const {
     l.covariance.topLeftCorner<2, 2>() = p_.block<2, 2>(3 + 2 * s, 3 + 2 * s);
     l.covariance(2, 2) = kUnknownHeadingVar;
     l.moving = l.tentative = slots_[s].moving;
+    l.first_seen_step = slots_[s].first_seen_step;
     l.last_seen_step = slots_[s].last_seen_step;
     e.landmarks.push_back(l);
   }

@@ -118,6 +118,7 @@ class EkfSlam : public SlamFilter {
     int landmark_id = -1;
     int origin_robot = -1;  // provenance (MapLandmark::origin_robot, origin_track)
     std::uint32_t origin_track = 0;
+    std::uint32_t first_seen_step = 0;
     std::uint32_t last_seen_step = 0;
     int misses = 0;
     bool moving = false;     // on probation (ekf_ela, step 6)

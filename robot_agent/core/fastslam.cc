@@ -664,6 +664,8 @@ FilterEstimate FastSlam<D>::Estimate() const {
     a.out.origin_robot = b.meta[l].origin_robot;
     a.out.origin_track = b.meta[l].origin_track;
     a.out.last_seen_step = std::max(a.out.last_seen_step, b.meta[l].last_seen_step);
+    a.out.first_seen_step =
+        a.weight == wp ? b.meta[l].first_seen_step : std::min(a.out.first_seen_step, b.meta[l].first_seen_step);
     if (has_heading(b, l)) {
       a.heading_weight += wp;
       a.c += wp * std::cos(HeadingOf(b, l));

@@ -27,6 +27,7 @@ struct MapLandmark {
   bool moving = false;
   bool tentative = false;
   std::uint32_t last_seen_step = 0;
+  std::uint32_t first_seen_step = 0;  // its first sighting here (merged: the step of the merge)
   // Provenance: the robot (scenario index) that first mapped the landmark and its track id
   // there. Merged landmarks keep theirs, so a landmark coming back from a peer is recognized.
   int origin_robot = -1;

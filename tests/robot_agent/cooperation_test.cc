@@ -617,6 +617,28 @@ TEST(Cooperation, TwoAgentsMeetAgreeAndMergeMaps) {
   EXPECT_EQ(sim.agent(1).rejected_messages(), 0);
 }
 
+// A landmark of the own map goes into snapshots once it has been seen over
+// cooperation.min_seen_span_steps (6) steps; one a peer passed on goes as it came.
+TEST(Cooperation, OwnLandmarksAreSharedOnceSeenLongEnough) {
+  // r1's first landmark is its own alone; r2 holds the second and third. Seen from step
+  // `first` to step 12, by r1 itself or (origin 2) by r3, which r1 met earlier.
+  const auto r2_landmarks_after_merge = [](std::uint32_t first, int origin) {
+    Sim sim(
+        Scenario(3), [](std::uint32_t k, int i, int j) { return i == 0 && j == 1 && k >= 5 && k <= 30; }, 21);
+    MapLandmark& l = sim.filter(0).estimate.landmarks[0];
+    l.origin_robot = origin;
+    l.origin_track = l.track_id;
+    l.first_seen_step = first;
+    l.last_seen_step = 12;
+    sim.Run(16);
+    EXPECT_EQ(sim.filter(1).merges, 1);
+    return sim.filter(1).estimate.landmarks.size();
+  };
+  EXPECT_EQ(r2_landmarks_after_merge(7, 0), 2u);  // seen over 5 steps: withheld
+  EXPECT_EQ(r2_landmarks_after_merge(6, 0), 3u);  // over 6: shared and added
+  EXPECT_EQ(r2_landmarks_after_merge(7, 2), 3u);  // r3's: passed on
+}
+
 // The refined transform stays consistent over seeds and is more precise than one detection.
 TEST(Cooperation, RefinedTransformIsConsistentOverSeeds) {
   double nees_sum = 0.0;
@@ -1182,13 +1204,16 @@ TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
   EXPECT_EQ(o.cooperation.map_fusion, common::MapFusionRule::kCovarianceIntersection);
   EXPECT_TRUE(o.cooperation.merge_maps);
   EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 256);
+  EXPECT_EQ(o.cooperation.min_seen_span_steps, 6);
   o = common::CreateScenarioOptions(YAML::Load(std::string(base) +
                                                "cooperation: {map_fusion: average, merge_maps: false, "
-                                               "max_snapshot_landmarks: 10, cooperative_localization: true}\n"));
+                                               "max_snapshot_landmarks: 10, cooperative_localization: true, "
+                                               "min_seen_span_steps: 0}\n"));
   EXPECT_EQ(o.cooperation.map_fusion, common::MapFusionRule::kAverage);
   EXPECT_FALSE(o.cooperation.merge_maps);
   EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 10);
   EXPECT_TRUE(o.cooperation.cooperative_localization);
+  EXPECT_EQ(o.cooperation.min_seen_span_steps, 0);
   EXPECT_THROW(common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {fusion: x}\n")),
                common::ScenarioError);
   EXPECT_THROW(common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {map_fusion: x}\n")),
@@ -1197,6 +1222,9 @@ TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
   std::string error;
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("cooperation.max_snapshot_landmarks"), std::string::npos);
+  o = common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {min_seen_span_steps: -1}\n"));
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("cooperation.min_seen_span_steps"), std::string::npos);
   o = common::CreateScenarioOptions(YAML::Load(std::string(base) + "filter: {max_landmark_position_sd_m: .inf}\n"));
   EXPECT_TRUE(std::isinf(o.filter.max_landmark_position_sd_m));
   EXPECT_TRUE(o.IsValid(&error));
