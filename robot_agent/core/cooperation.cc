@@ -373,7 +373,9 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
     const Eigen::Matrix3d jp = common::ComposeJacobianRight(peer.transform->t, theirs.sender_pose);
     const Eigen::Matrix3d c =
         jt * peer.transform->Covariance() * jt.transpose() + jp * theirs.sender_covariance * jp.transpose();
-    if (filter->ObserveKnownRobot(in_own.Translation(), 2.0 * c.topLeftCorner<2, 2>(), own.range_m, own.bearing_rad)) {
+    const double gate = common::ChiSquare2Quantile(scenario_.cooperation.transform_gate_probability);
+    if (filter->ObserveKnownRobot(in_own.Translation(), 2.0 * c.topLeftCorner<2, 2>(), own.range_m, own.bearing_rad,
+                                  gate)) {
       ++cooperative_updates_;
     }
     return;

@@ -834,9 +834,24 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
 
 template <int D>
 bool FastSlam<D>::ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen::Matrix2d& covariance, double range_m,
-                                    double bearing_rad) {
+                                    double bearing_rad, double gate) {
   if (!position.allFinite() || !covariance.allFinite() || !std::isfinite(range_m) || !std::isfinite(bearing_rad)) {
     return false;
+  }
+  // The outlier test: the innovation at the mean pose against S + H_x Sigma H_x^T, Sigma the
+  // particles' pose covariance, H_x = d(range, bearing)/d(pose) = [-H | (0, -1)^T].
+  {
+    const double dx = position.x() - pose_.x, dy = position.y() - pose_.y;
+    const double q = std::max(dx * dx + dy * dy, 1e-12), r = std::sqrt(q);
+    Eigen::Matrix2d h;
+    h << dx / r, dy / r, -dy / q, dx / q;
+    Eigen::Matrix<double, 2, 3> hx;
+    hx << -h, Eigen::Vector2d(0.0, -1.0);
+    Eigen::Matrix2d s = h * covariance * h.transpose() + hx * pose_covariance_ * hx.transpose();
+    s(0, 0) += var_r_;
+    s(1, 1) += var_b_;
+    const Eigen::Vector2d nu(range_m - r, WrapAngle(bearing_rad - (std::atan2(dy, dx) - pose_.heading)));
+    if (!(nu.dot(s.ldlt().solve(nu)) <= gate)) return false;
   }
   for (int p = 0; p < NumParticles(); ++p) {
     const Pose2& x = particles_[p].pose;

@@ -90,10 +90,12 @@ class FastSlam : public SlamFilter {
   // are written through MutableBlock, so copy-on-write sharing stays intact.
   int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
                      double gate_probability) override;
-  // Cooperative localization: log w_p += log N(z - h(pose_p, position); 0, H C H^T + R), with
-  // H = d(range, bearing)/d(position) and R the lidar noise.
+  // Cooperative localization: log w_p += log N(nu_p; 0, S_p), nu_p = z - h(pose_p, position),
+  // S_p = H C H^T + R, with H = d(range, bearing)/d(position) and R the lidar noise; not applied
+  // when the innovation at the mean pose exceeds the gate under S + H_x Sigma H_x^T (Sigma the
+  // particles' pose covariance).
   bool ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen::Matrix2d& covariance, double range_m,
-                         double bearing_rad) override;
+                         double bearing_rad, double gate) override;
 
   // Introspection for tests and benchmarks.
   int NumParticles() const { return static_cast<int>(particles_.size()); }

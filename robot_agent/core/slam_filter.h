@@ -88,9 +88,11 @@ class SlamFilter {
 
   // Cooperative localization: at the current step this robot detected, at (range_m,
   // bearing_rad), a robot whose position in the own frame is N(position, covariance). A filter
-  // that supports it weighs its pose hypotheses by that measurement; returns false otherwise.
+  // that supports it weighs its pose hypotheses by that measurement, unless its innovation at
+  // the estimate lies beyond the squared Mahalanobis distance gate (an outlier); returns whether
+  // it used it.
   virtual bool ObserveKnownRobot(const Eigen::Vector2d& /*position*/, const Eigen::Matrix2d& /*covariance*/,
-                                 double /*range_m*/, double /*bearing_rad*/) {
+                                 double /*range_m*/, double /*bearing_rad*/, double /*gate*/) {
     return false;
   }
 };

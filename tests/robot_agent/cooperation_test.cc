@@ -435,7 +435,7 @@ class FakeFilter : public SlamFilter {
     }
     return added;
   }
-  bool ObserveKnownRobot(const Eigen::Vector2d&, const Eigen::Matrix2d&, double, double) override {
+  bool ObserveKnownRobot(const Eigen::Vector2d&, const Eigen::Matrix2d&, double, double, double) override {
     ++robot_observations;
     return true;
   }
@@ -1184,10 +1184,19 @@ TEST_P(WithFastSlam, ObservingAKnownRobotReweightsParticles) {
   // A robot 2 m ahead of the mean pose: particles that agree gain weight.
   const FilterEstimate e = filter_->Estimate();
   const Eigen::Vector2d there = common::PointFromRangeBearing(e.pose, {2.0, 0.0});
-  ASSERT_TRUE(filter_->ObserveKnownRobot(there, Eigen::Matrix2d::Identity() * 1e-4, 2.0, 0.0));
+  const double gate = common::ChiSquare2Quantile(0.9999);
+  ASSERT_TRUE(filter_->ObserveKnownRobot(there, Eigen::Matrix2d::Identity() * 1e-4, 2.0, 0.0, gate));
   double sum = 0.0;
-  for (int p = 0; p < fast->NumParticles(); ++p) sum += fast->ParticleWeight(p);
+  std::vector<double> weights;
+  for (int p = 0; p < fast->NumParticles(); ++p) {
+    weights.push_back(fast->ParticleWeight(p));
+    sum += weights.back();
+  }
   EXPECT_NEAR(sum, 1.0, 1e-9);
+  // A detection 3 m off where the robot is said to be is an outlier: not used,
+  // the weights stay as they are.
+  EXPECT_FALSE(filter_->ObserveKnownRobot(there, Eigen::Matrix2d::Identity() * 1e-4, 5.0, 0.0, gate));
+  for (int p = 0; p < fast->NumParticles(); ++p) EXPECT_EQ(fast->ParticleWeight(p), weights[p]);
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinematics, WithFastSlam,
