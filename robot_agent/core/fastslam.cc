@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <tuple>
 #include <utility>
@@ -644,6 +645,7 @@ FilterEstimate FastSlam<D>::Estimate() const {
     Eigen::Vector2d xy = Eigen::Vector2d::Zero();
     double c = 0.0, s = 0.0, v = 0.0, v_var = 0.0, w = 0.0;
     Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+    std::uint32_t first_seen = std::numeric_limits<std::uint32_t>::max();
     MapLandmark out;
   };
   std::map<std::uint32_t, Accumulator> tracks;
@@ -664,8 +666,7 @@ FilterEstimate FastSlam<D>::Estimate() const {
     a.out.origin_robot = b.meta[l].origin_robot;
     a.out.origin_track = b.meta[l].origin_track;
     a.out.last_seen_step = std::max(a.out.last_seen_step, b.meta[l].last_seen_step);
-    a.out.first_seen_step =
-        a.weight == wp ? b.meta[l].first_seen_step : std::min(a.out.first_seen_step, b.meta[l].first_seen_step);
+    a.first_seen = std::min(a.first_seen, b.meta[l].first_seen_step);
     if (has_heading(b, l)) {
       a.heading_weight += wp;
       a.c += wp * std::cos(HeadingOf(b, l));
@@ -676,6 +677,7 @@ FilterEstimate FastSlam<D>::Estimate() const {
     }
   });
   for (auto& [id, a] : tracks) {
+    a.out.first_seen_step = a.first_seen;
     a.out.mean.template head<2>() = a.xy / a.weight;
     a.out.mean(2) = a.heading_weight > 0.0 ? std::atan2(a.s, a.c) : 0.0;
   }
@@ -838,32 +840,33 @@ bool FastSlam<D>::ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen
   if (!position.allFinite() || !covariance.allFinite() || !std::isfinite(range_m) || !std::isfinite(bearing_rad)) {
     return false;
   }
-  // The outlier test: the innovation at the mean pose against S + H_x Sigma H_x^T, Sigma the
-  // particles' pose covariance, H_x = d(range, bearing)/d(pose) = [-H | (0, -1)^T].
-  {
-    const double dx = position.x() - pose_.x, dy = position.y() - pose_.y;
-    const double q = std::max(dx * dx + dy * dy, 1e-12), r = std::sqrt(q);
-    Eigen::Matrix2d h;
-    h << dx / r, dy / r, -dy / q, dx / q;
+  // The innovation of the detection from pose x, its covariance without the pose's uncertainty
+  // (S = H C H^T + R) and H_x = d(range, bearing)/d(pose) = [-H | (0, -1)^T].
+  struct Innovation {
+    Eigen::Vector2d nu;
+    Eigen::Matrix2d s;
     Eigen::Matrix<double, 2, 3> hx;
-    hx << -h, Eigen::Vector2d(0.0, -1.0);
-    Eigen::Matrix2d s = h * covariance * h.transpose() + hx * pose_covariance_ * hx.transpose();
-    s(0, 0) += var_r_;
-    s(1, 1) += var_b_;
-    const Eigen::Vector2d nu(range_m - r, WrapAngle(bearing_rad - (std::atan2(dy, dx) - pose_.heading)));
-    if (!(nu.dot(s.ldlt().solve(nu)) <= gate)) return false;
-  }
-  for (int p = 0; p < NumParticles(); ++p) {
-    const Pose2& x = particles_[p].pose;
+  };
+  const auto innovation = [&](const Pose2& x) {
     const double dx = position.x() - x.x, dy = position.y() - x.y;
     const double q = std::max(dx * dx + dy * dy, 1e-12), r = std::sqrt(q);
     Eigen::Matrix2d h;
     h << dx / r, dy / r, -dy / q, dx / q;
-    Eigen::Matrix2d s = h * covariance * h.transpose();
-    s(0, 0) += var_r_;
-    s(1, 1) += var_b_;
-    const Eigen::Vector2d nu(range_m - r, WrapAngle(bearing_rad - (std::atan2(dy, dx) - x.heading)));
-    log_weights_[p] += common::LogGaussian2(nu, s);
+    Innovation out{
+        {range_m - r, WrapAngle(bearing_rad - (std::atan2(dy, dx) - x.heading))}, h * covariance * h.transpose(), {}};
+    out.s(0, 0) += var_r_;
+    out.s(1, 1) += var_b_;
+    out.hx << -h, Eigen::Vector2d(0.0, -1.0);
+    return out;
+  };
+  // The outlier test: at the mean pose, against S + H_x Sigma H_x^T (Sigma the particles' pose
+  // covariance).
+  const Innovation at_mean = innovation(pose_);
+  const Eigen::Matrix2d s_mean = at_mean.s + at_mean.hx * pose_covariance_ * at_mean.hx.transpose();
+  if (!(at_mean.nu.dot(s_mean.ldlt().solve(at_mean.nu)) <= gate)) return false;
+  for (int p = 0; p < NumParticles(); ++p) {
+    const Innovation z = innovation(particles_[p].pose);
+    log_weights_[p] += common::LogGaussian2(z.nu, z.s);
   }
   NormalizeLogWeights(&log_weights_);
   return true;
