@@ -90,8 +90,8 @@ bool ValidTransform(const FrameTransform& t) {
 
 // The landmarks a snapshot carries: the confirmed ones of the estimate, those of the own robot
 // (self_index) only once seen over options.min_seen_span_steps, the most recently seen first
-// when options.max_snapshot_landmarks cuts. The alignment selects the own map the same way, so that both sides of a
-// rendezvous align the same two sets of landmarks.
+// when options.max_snapshot_landmarks cuts. The alignment selects the own map the same way, so
+// that both sides of a rendezvous align the same two sets of landmarks.
 std::vector<MapLandmark> SnapshotLandmarks(const FilterEstimate& estimate, int self_index,
                                            const common::CooperationOptions& options) {
   std::vector<const MapLandmark*> confirmed;
