@@ -393,6 +393,7 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     d.min_seen_span_steps = c.Get("min_seen_span_steps", d.min_seen_span_steps);
     d.cooperative_localization = c.Get("cooperative_localization", d.cooperative_localization);
     d.match_gate_probability = c.Get("match_gate_probability", d.match_gate_probability);
+    d.merge_min_separation_m = c.Get("merge_min_separation_m", d.merge_min_separation_m);
     d.transform_gate_probability = c.Get("transform_gate_probability", d.transform_gate_probability);
     d.joint_transform = c.Get("joint_transform", d.joint_transform);
     d.max_history_steps = c.Get("max_history_steps", d.max_history_steps);
@@ -626,6 +627,8 @@ bool ScenarioOptions::IsValid(std::string* error) const {
           "must not be negative");
   c.Check(co.match_gate_probability > 0.0 && co.match_gate_probability < 1.0, "cooperation.match_gate_probability",
           co.match_gate_probability, "must be in (0, 1)");
+  c.Check(co.merge_min_separation_m >= 0.0, "cooperation.merge_min_separation_m", co.merge_min_separation_m,
+          "must not be negative");
   c.Check(co.transform_gate_probability > 0.0 && co.transform_gate_probability < 1.0,
           "cooperation.transform_gate_probability", co.transform_gate_probability, "must be in (0, 1)");
   c.Check(co.max_history_steps >= 0 && co.max_history_steps <= 10000, "cooperation.max_history_steps",

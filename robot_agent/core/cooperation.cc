@@ -588,7 +588,8 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
     }
   }
   if (moved.empty()) return;
-  filter->MergeLandmarks(moved, scenario_.cooperation.map_fusion, scenario_.cooperation.match_gate_probability);
+  filter->MergeLandmarks(moved, scenario_.cooperation.map_fusion, scenario_.cooperation.match_gate_probability,
+                         scenario_.cooperation.merge_min_separation_m);
 }
 
 MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const FilterEstimate& estimate, bool with_map) const {

@@ -522,25 +522,28 @@ FilterEstimate EkfSlam::Estimate() const {
 }
 
 int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
-                            double gate_probability) {
+                            double gate_probability, double too_close_m) {
   std::vector<MatchCandidate> own, incoming;
   std::vector<int> own_slot;  // the map landmarks (not those on probation)
   std::vector<const MapLandmark*> usable;
   for (int s = 0; s < NumSlots(); ++s) {
     if (slots_[s].moving) continue;
     own.push_back({x_.segment<2>(3 + 2 * s), p_.block<2, 2>(3 + 2 * s, 3 + 2 * s), slots_[s].landmark_id,
-                   OriginKey(slots_[s].origin_robot, slots_[s].origin_track)});
+                   OriginKey(slots_[s].origin_robot, slots_[s].origin_track), /*stationary=*/true});
     own_slot.push_back(s);
   }
   for (const auto& l : landmarks_in_own_frame) {
     const Eigen::Matrix2d c = l.covariance.topLeftCorner<2, 2>();
     if (l.moving || !l.mean.head<2>().allFinite() || !common::IsSymmetricPositiveDefinite<2>(c)) continue;
     usable.push_back(&l);
-    incoming.push_back({l.mean.head<2>(), c, l.landmark_id, OriginKey(l.origin_robot, l.origin_track)});
+    incoming.push_back({l.mean.head<2>(), c, l.landmark_id, OriginKey(l.origin_robot, l.origin_track),
+                        /*stationary=*/true});
   }
-  const std::vector<int> match = MatchLandmarks(own, incoming, common::ChiSquare2Quantile(gate_probability));
+  const std::vector<int> match =
+      MatchLandmarks(own, incoming, common::ChiSquare2Quantile(gate_probability), too_close_m);
   int added = 0;
   for (std::size_t i = 0; i < usable.size(); ++i) {
+    if (match[i] == kTooClose) continue;
     const Eigen::Vector2d z = incoming[i].position;
     const Eigen::Matrix2d r = incoming[i].covariance;
     if (match[i] < 0) {

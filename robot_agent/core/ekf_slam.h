@@ -78,9 +78,9 @@ class EkfSlam : public SlamFilter {
   // R = C_in / (1 - omega), omega minimizing det of the fused landmark block — the own joint
   // covariance is not inflated by 1 / omega, which would compound over a snapshot; average:
   // K = I / 2 on the landmark rows) in Joseph form; unmatched ones (not moving) are appended
-  // uncorrelated.
+  // uncorrelated, except those too close to a mapped one (kTooClose).
   int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
-                     double gate_probability) override;
+                     double gate_probability, double too_close_m) override;
 
   // Landmarks found moving since the last call (ekf_ela), for "landmark moved" notices.
   std::vector<MovedLandmark> TakeMovedLandmarks() override;

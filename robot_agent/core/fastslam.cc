@@ -723,8 +723,8 @@ FilterEstimate FastSlam<D>::Estimate() const {
 }
 
 template <int D>
-int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapFusionRule rule,
-                                double gate_probability) {
+int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapFusionRule rule, double gate_probability,
+                                double too_close_m) {
   if (in.empty()) return 0;
   const double gate = common::ChiSquare2Quantile(gate_probability);
   // A peer heading is used when it is known better than half the uniform variance.
@@ -733,7 +733,7 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
   incoming.reserve(in.size());
   for (const auto& l : in) {
     incoming.push_back({l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id,
-                        OriginKey(l.origin_robot, l.origin_track)});
+                        OriginKey(l.origin_robot, l.origin_track), l.motion == LandmarkMotionKind::kStatic});
   }
   std::vector<std::uint32_t> new_ids(in.size(), 0);  // one track id per added landmark
   std::vector<MatchCandidate> own;
@@ -747,11 +747,13 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
       own.push_back({{b.Mean(0, l), b.Mean(1, l)},
                      c,
                      b.meta[l].landmark_id,
-                     OriginKey(b.meta[l].origin_robot, b.meta[l].origin_track)});
+                     OriginKey(b.meta[l].origin_robot, b.meta[l].origin_track),
+                     D == 2 || b.meta[l].stationary});
     }
-    const std::vector<int> match = MatchLandmarks(own, incoming, gate);
+    const std::vector<int> match = MatchLandmarks(own, incoming, gate, too_close_m);
     for (std::size_t i = 0; i < in.size(); ++i) {
       const MapLandmark& peer = in[i];
+      if (match[i] == kTooClose) continue;
       const bool peer_heading = D > 2 && heading_known(peer.covariance);
       if (match[i] >= 0) {
         Block* block = MutableBlock(&particle, match[i] / kLanes);

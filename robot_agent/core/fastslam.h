@@ -86,10 +86,11 @@ class FastSlam : public SlamFilter {
   // (MatchLandmarks: identities or provenance, else Mahalanobis on position); a match is fused by rule
   // (FuseObservation on position, plus heading when both have one); the others are added to
   // every particle under one new track id each, confirmed (the peer confirmed them), except those
-  // whose position standard deviation exceeds max_landmark_position_sd_m (step 6). Blocks
+  // whose position standard deviation exceeds max_landmark_position_sd_m (step 6) and, per
+  // particle, the static ones too close to a static own landmark (kTooClose). Blocks
   // are written through MutableBlock, so copy-on-write sharing stays intact.
   int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
-                     double gate_probability) override;
+                     double gate_probability, double too_close_m) override;
   // Cooperative localization: log w_p += log N(nu_p; 0, S_p), nu_p = z - h(pose_p, position),
   // S_p = H C H^T + R, with H = d(range, bearing)/d(position) and R the lidar noise; not applied
   // when the innovation at the mean pose exceeds the gate under S + H_x Sigma H_x^T (Sigma the

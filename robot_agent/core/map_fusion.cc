@@ -144,7 +144,7 @@ std::int64_t OriginKey(int origin_robot, std::uint32_t origin_track) {
 }
 
 std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const std::vector<MatchCandidate>& incoming,
-                                double gate_d2) {
+                                double gate_d2, double too_close_m) {
   // (distance, incoming, own); identity matches get distance -1 so that they come first.
   std::vector<std::tuple<double, int, int>> pairs;
   for (int i = 0; i < static_cast<int>(incoming.size()); ++i) {
@@ -174,6 +174,15 @@ std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const st
     if (match[i] >= 0 || own_used[j]) continue;
     match[i] = j;
     own_used[j] = 1;
+  }
+  for (std::size_t i = 0; i < incoming.size(); ++i) {
+    if (match[i] >= 0 || incoming[i].landmark_id >= 0 || !incoming[i].stationary) continue;
+    for (const MatchCandidate& o : own) {
+      if (o.stationary && (incoming[i].position - o.position).norm() < too_close_m) {
+        match[i] = kTooClose;
+        break;
+      }
+    }
   }
   return match;
 }

@@ -42,6 +42,7 @@ struct MatchCandidate {
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
   int landmark_id = -1;
   std::int64_t origin = -1;  // OriginKey of its provenance, -1 if unknown
+  bool stationary = false;   // taken as static (kTooClose applies to static landmarks only)
 };
 
 // One number for a provenance (robot index, track id); -1 when the robot is unknown (< 0).
@@ -52,8 +53,12 @@ std::int64_t OriginKey(int origin_robot, std::uint32_t origin_track);
 // keys) match as identities do; otherwise a pair is a candidate when the squared Mahalanobis
 // distance of the positions under the sum of their covariances is within gate_d2 (chi-square,
 // 2 dof). Candidates are taken greedily by increasing distance (identity and provenance matches
-// first). Returns, per incoming landmark, the index of its own match or -1.
+// first). Returns, per incoming landmark, the index of its own match, or kTooClose for an
+// unmatched stationary one (without a reported identity) that lies within too_close_m
+// (Euclidean) of a stationary own landmark, or -1. Static landmarks stand apart as the world
+// places them; moving ones may pass close by others, so there nearness says nothing.
+constexpr int kTooClose = -2;
 std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const std::vector<MatchCandidate>& incoming,
-                                double gate_d2);
+                                double gate_d2, double too_close_m = 0.0);
 
 }  // namespace mrslam::robot_agent

@@ -82,9 +82,10 @@ class SlamFilter {
   // landmark is gated against the own landmarks (squared Mahalanobis distance of the positions
   // under the sum of their covariances within the chi-square 2 dof quantile of gate_probability;
   // reported identities decide when both carry one); matched landmarks are fused by rule
-  // (map_fusion.h), unmatched ones are added. Returns how many landmarks were added.
+  // (map_fusion.h), unmatched ones are added, except those within too_close_m of an own
+  // landmark (MatchLandmarks' kTooClose), which are left out. Returns how many were added.
   virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
-                             double gate_probability) = 0;
+                             double gate_probability, double too_close_m) = 0;
 
   // Cooperative localization: at the current step this robot detected, at (range_m,
   // bearing_rad), a robot whose position in the own frame is N(position, covariance). A filter

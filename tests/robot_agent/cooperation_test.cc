@@ -411,7 +411,8 @@ class FakeFilter : public SlamFilter {
  public:
   void Process(const common::SensorStep&) override {}
   FilterEstimate Estimate() const override { return estimate; }
-  int MergeLandmarks(const std::vector<MapLandmark>& in, common::MapFusionRule rule, double gate_probability) override {
+  int MergeLandmarks(const std::vector<MapLandmark>& in, common::MapFusionRule rule, double gate_probability,
+                     double /*too_close_m*/) override {
     ++merges;
     std::vector<MatchCandidate> own, incoming;
     for (const auto& l : estimate.landmarks)
@@ -1061,7 +1062,7 @@ TEST_P(WithFastSlam, MergeFusesMatchedAndAddsNewLandmarks) {
   in[0].covariance = before.landmarks[0].covariance;
   in[1].mean = {-3.0, -2.0, 0.0};  // a landmark this robot never saw
   in[1].covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
-  const int added = filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999);
+  const int added = filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.0);
   if (GetParam() == common::LandmarkKinematics::kConstantTurnRate) {
     // Each particle gates with its own landmark covariance, which is tight where the particle
     // takes the landmark as static: a particle far out in the mixture may take the first as new.
@@ -1122,7 +1123,7 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   in[2].covariance = Eigen::Vector3d(1.9, 1.9, 0.01).asDiagonal();
   in[2].v_mps = 0.3;  // a static report whose mixture still carries a heading and a speed
   in[2].motion = LandmarkMotionKind::kStatic;
-  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999), 2);
+  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.0), 2);
   EXPECT_EQ(count_near(filter_->Estimate(), far), 1);
   EXPECT_EQ(count_near(filter_->Estimate(), farther), 0);
   EXPECT_EQ(count_near(filter_->Estimate(), still), 1);
@@ -1140,13 +1141,37 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   }
 }
 
+// cooperation.merge_min_separation_m: a static peer landmark outside the gate of the static own
+// one it lies next to is left out, not added as a second copy; farther off, it is added. Next to
+// a moving landmark (known candidates here) it is added: moving landmarks pass close by others.
+TEST_P(WithFastSlam, MergeLeavesOutPeerLandmarksTooCloseToOwnOnes) {
+  if (GetParam() == common::LandmarkKinematics::kConstantTurnRate) {
+    GTEST_SKIP() << "whether the own landmark is static differs from particle to particle";
+  }
+  const FilterEstimate before = filter_->Estimate();
+  ASSERT_FALSE(before.landmarks.empty());
+  std::vector<MapLandmark> in(1);
+  in[0].mean = before.landmarks[0].mean + Eigen::Vector3d(1.0, 0.0, 0.0);
+  in[0].covariance = Eigen::Vector3d(1e-4, 1e-4, 3.0).asDiagonal();  // 1 m off, far beyond the gate
+  in[0].motion = LandmarkMotionKind::kStatic;
+  const int added = filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 1.5);
+  if (GetParam() == common::LandmarkKinematics::kKnownCandidates) {
+    EXPECT_EQ(added, 1);
+    return;
+  }
+  EXPECT_EQ(added, 0);
+  ExpectSameEstimate(filter_->Estimate(), before);
+  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.5), 1);
+  EXPECT_EQ(filter_->Estimate().landmarks.size(), before.landmarks.size() + 1);
+}
+
 TEST_P(WithFastSlam, MergeKeepsCopyOnWriteSharing) {
   auto* fast = dynamic_cast<FastSlam<2>*>(filter_.get());
   if (fast == nullptr) GTEST_SKIP() << "checked on the static instantiation";
   std::vector<MapLandmark> in(1);
   in[0].mean = {-3.0, -2.0, 0.0};
   in[0].covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
-  filter_->MergeLandmarks(in, common::MapFusionRule::kWeighted, 0.999);
+  filter_->MergeLandmarks(in, common::MapFusionRule::kWeighted, 0.999, 0.0);
   // Blocks are never shared by two particles after one of them wrote (each particle's storage
   // addresses are its own where it wrote); every particle holds the added landmark.
   for (int p = 0; p < fast->NumParticles(); ++p) EXPECT_EQ(fast->ParticleLandmarkCount(p), 3);
@@ -1159,7 +1184,7 @@ TEST_P(WithFastSlam, RejectedSnapshotsLeaveTheEstimateUnchanged) {
   MapSnapshot good;
   good.header = {"r2", "r1", before.step, before.time_s, 2};
   MapLandmark l;
-  l.mean = {1.0, 1.0, 0.0};
+  l.mean = {-3.0, -3.0, 0.0};  // far from the own landmarks: added
   l.covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
   good.landmarks.push_back(l);
   MapSnapshot nan = good;
@@ -1214,15 +1239,17 @@ TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
   EXPECT_TRUE(o.cooperation.merge_maps);
   EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 256);
   EXPECT_EQ(o.cooperation.min_seen_span_steps, 6);
+  EXPECT_EQ(o.cooperation.merge_min_separation_m, 1.5);
   o = common::CreateScenarioOptions(YAML::Load(std::string(base) +
                                                "cooperation: {map_fusion: average, merge_maps: false, "
                                                "max_snapshot_landmarks: 10, cooperative_localization: true, "
-                                               "min_seen_span_steps: 0}\n"));
+                                               "min_seen_span_steps: 0, merge_min_separation_m: 0}\n"));
   EXPECT_EQ(o.cooperation.map_fusion, common::MapFusionRule::kAverage);
   EXPECT_FALSE(o.cooperation.merge_maps);
   EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 10);
   EXPECT_TRUE(o.cooperation.cooperative_localization);
   EXPECT_EQ(o.cooperation.min_seen_span_steps, 0);
+  EXPECT_EQ(o.cooperation.merge_min_separation_m, 0.0);
   EXPECT_THROW(common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {fusion: x}\n")),
                common::ScenarioError);
   EXPECT_THROW(common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {map_fusion: x}\n")),
@@ -1234,6 +1261,9 @@ TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
   o = common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {min_seen_span_steps: -1}\n"));
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("cooperation.min_seen_span_steps"), std::string::npos);
+  o = common::CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {merge_min_separation_m: -1}\n"));
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("cooperation.merge_min_separation_m"), std::string::npos);
   o = common::CreateScenarioOptions(YAML::Load(std::string(base) + "filter: {max_landmark_position_sd_m: .inf}\n"));
   EXPECT_TRUE(std::isinf(o.filter.max_landmark_position_sd_m));
   EXPECT_TRUE(o.IsValid(&error));

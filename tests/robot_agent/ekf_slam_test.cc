@@ -199,12 +199,32 @@ TEST(EkfSlamTest, MergeFusesKnownLandmarksAndAddsNewOnes) {
     far.covariance = 0.01 * Eigen::Matrix3d::Identity();
     incoming.push_back(far);
     const double before = ekf.Covariance().block(3, 3, 2, 2).trace();
-    EXPECT_EQ(ekf.MergeLandmarks(incoming, rule, 0.999), 1);
+    EXPECT_EQ(ekf.MergeLandmarks(incoming, rule, 0.999, 0.0), 1);
     EXPECT_EQ(ekf.NumMapped(), 3);
     const double after = ekf.Covariance().block(3, 3, 2, 2).trace();
     EXPECT_LE(after, before * (1.0 + 1e-9));
     EXPECT_TRUE(common::IsSymmetricPositiveDefinite<Eigen::Dynamic>(ekf.Covariance(), 1e-9));
   }
+}
+
+// A peer landmark outside the gate but within merge_min_separation_m of a mapped one is left
+// out; the state is unchanged.
+TEST(EkfSlamTest, MergeLeavesOutLandmarksTooCloseToMappedOnes) {
+  common::ScenarioOptions o = OneRobotScenario(0.3, 0.1, 1);
+  AddLandmark(&o, 1, {2.0, 1.0, 0.0});
+  EkfSlam ekf(o, "r1", /*ela=*/false);
+  TinyWorld world(o, 3);
+  for (int k = 0; k < 10; ++k) ekf.Process(world.Step());
+  ASSERT_EQ(ekf.NumMapped(), 1);
+  MapLandmark near;  // no identity, no provenance: matched by the gate alone
+  near.mean = ekf.Estimate().landmarks[0].mean + Eigen::Vector3d(1.0, 0.0, 0.0);
+  near.covariance = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::MatrixXd p_before = ekf.Covariance();
+  EXPECT_EQ(ekf.MergeLandmarks({near}, common::MapFusionRule::kCovarianceIntersection, 0.999, 1.5), 0);
+  EXPECT_EQ(ekf.NumMapped(), 1);
+  EXPECT_EQ(ekf.Covariance(), p_before);
+  EXPECT_EQ(ekf.MergeLandmarks({near}, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.5), 1);
+  EXPECT_EQ(ekf.NumMapped(), 2);
 }
 
 }  // namespace

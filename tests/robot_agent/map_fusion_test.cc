@@ -225,6 +225,33 @@ TEST(MatchLandmarks, SameProvenanceMatchesLikeAnIdentity) {
   EXPECT_EQ(other[0], -1);
 }
 
+// An incoming static landmark outside the gate of every own one (tight covariances) but closer
+// than too_close_m to a static one is marked kTooClose: the merge leaves it out instead of adding
+// a copy. Moving landmarks pass close by others: nearness does not mark them.
+TEST(MatchLandmarks, UnmatchedButTooCloseIsMarked) {
+  const double gate = common::ChiSquare2Quantile(0.999);
+  const Eigen::Matrix2d c = Eigen::Matrix2d::Identity() * 0.01;
+  const std::vector<MatchCandidate> own = {
+      {{0.0, 0.0}, c, -1, -1, true}, {{10.0, 0.0}, c, 4, -1, true}, {{20.0, 0.0}, c, -1, -1, false}};
+  const std::vector<MatchCandidate> incoming = {
+      {{1.0, 0.0}, c, -1, -1, true},    // 1 m off: beyond the gate (d2 = 50), within 1.5 m
+      {{0.0, 1.6}, c, -1, -1, true},    // 1.6 m off: a landmark of its own
+      {{0.05, 0.0}, c, -1, -1, true},   // within the gate: matched
+      {{11.0, 0.0}, c, 5, -1, true},    // 1 m from own 1, but another reported identity
+      {{21.0, 0.0}, c, -1, -1, true},   // 1 m from a moving own landmark
+      {{0.0, -1.0}, c, -1, -1, false},  // moving, 1 m from own 0
+  };
+  const std::vector<int> m = MatchLandmarks(own, incoming, gate, 1.5);
+  EXPECT_EQ(m[0], kTooClose);
+  EXPECT_EQ(m[1], -1);
+  EXPECT_EQ(m[2], 0);
+  EXPECT_EQ(m[3], -1);
+  EXPECT_EQ(m[4], -1);
+  EXPECT_EQ(m[5], -1);
+  // Without the separation, the first is unmatched like any other.
+  EXPECT_EQ(MatchLandmarks(own, incoming, gate)[0], -1);
+}
+
 TEST(MatchLandmarks, DifferentIdentitiesNeverMatch) {
   const Eigen::Matrix2d c = Eigen::Matrix2d::Identity() * 0.01;
   const std::vector<int> m = MatchLandmarks({{{0.0, 0.0}, c, 1}}, {{{0.0, 0.0}, c, 2}}, 100.0);
