@@ -218,9 +218,9 @@ struct CooperationOptions {
   int min_seen_span_steps = 6;
   bool cooperative_localization = false;  // mutual detections also correct the own pose
   double match_gate_probability = 0.999;  // chi-square 2 dof gate, peer vs own landmark
-  // A peer landmark that matches no own one within the gate but lies closer than this to one is
-  // most likely the same landmark placed off by the peer's map or the transform: it is left out
-  // rather than added as a second copy.
+  // A static peer landmark that matches no own one within the gate but lies closer than this to
+  // a static own one is most likely the same landmark placed off by the peer's map or the
+  // transform: it is left out rather than added as a second copy (0: off).
   double merge_min_separation_m = 1.5;
   // A mutual detection whose transform disagrees with the one held beyond this chi-square 3 dof
   // gate is not fused (an outlier: e.g. a detection paired with the wrong robot).
