@@ -44,7 +44,10 @@
 //    landmark both robots know instead of one detection. Both agents send their snapshots in
 //    the same step and align the same two maps, so their results stay inverses of each other
 //    (up to linearization). Then it moves the landmarks into its frame with the refined
-//    transform's covariance (map_fusion.h) and merges them into its filter.
+//    transform's covariance (map_fusion.h) and merges them into its filter, unless the last
+//    mutual detection with the sender lay outside the transform gate of the one held: then one
+//    of the two robots is off in its own frame by more than its covariance says (the frames'
+//    transform is fixed), and the sender's map would not land where the transform puts it.
 //    Transitive frames: from a snapshot of j holding T(G_j <- G_k), the receiver composes
 //    T(G_i <- G_k) = T(G_i <- G_j) T(G_j <- G_k) for every k it did not know; a chained
 //    transform is later refined (SCI) by newer chains or replaced in effect by meeting k. The
@@ -388,6 +391,7 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
     const double gate = ChiSquare3Quantile(scenario_.cooperation.transform_gate_probability);
     const bool fuse = !peer.met || TransformDistanceSquared(*peer.transform, estimate) <= gate;
     held = fuse ? FuseSplitCi(*peer.transform, estimate) : *peer.transform;
+    peer.last_detection_outlier = !fuse;
   }
   peer.met = true;
   HoldTransform(&peer, held, step);
@@ -573,7 +577,8 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
     k.transform = k.transform ? FuseSplitCi(*k.transform, chained) : chained;
     k.transform_step = m.header.step;
   }
-  if (!scenario_.cooperation.merge_maps || filter == nullptr || m.landmarks.empty()) return;
+  if (!scenario_.cooperation.merge_maps || filter == nullptr || m.landmarks.empty() || sender.last_detection_outlier)
+    return;
   std::vector<MapLandmark> moved;
   moved.reserve(m.landmarks.size());
   const Eigen::Matrix3d t_cov = t_self_sender.Covariance();

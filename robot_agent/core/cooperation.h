@@ -70,7 +70,10 @@ class Cooperation {
   struct PeerState {
     std::optional<TransformEstimate> transform;  // T(G_self <- G_peer)
     bool met = false;                            // from own mutual detections (else chained)
-    std::uint32_t transform_step = 0;            // when last estimated
+    // The last mutual detection lay beyond the transform gate of the one held: one of the two
+    // robots is off in its own frame, and a snapshot from the peer is not merged meanwhile.
+    bool last_detection_outlier = false;
+    std::uint32_t transform_step = 0;  // when last estimated
     // Detections not yet paired into a mutual detection, by step (bounded by the window).
     std::map<std::uint32_t, OwnDetection> own_detections;
     std::map<std::uint32_t, RelativeMeasurement> peer_measurements;

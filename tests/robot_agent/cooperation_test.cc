@@ -494,6 +494,7 @@ class Sim {
       }
     }
     inbox_.resize(scenario_.robots.size());
+    pose_error_.resize(scenario_.robots.size());
   }
 
   Pose2 Frame(std::size_t i) const { return scenario_.robots[i].frame_in_world; }
@@ -516,6 +517,9 @@ class Sim {
   FakeFilter& filter(std::size_t i) { return *filters_[i]; }
   std::uint32_t step() const { return step_; }
   const std::vector<Eigen::Vector2d>& landmarks() const { return landmarks_; }
+  // From now on robot i's pose estimates are off by this (in its body frame): a lost robot
+  // whose covariance does not say so.
+  void SetPoseError(std::size_t i, const Pose2& error) { pose_error_[i] = error; }
   int sent_maps = 0;
 
  private:
@@ -529,7 +533,8 @@ class Sim {
       e.step = k;
       e.time_s = 0.65 * k;
       e.covariance = cov;
-      e.pose = SamplePose(&rng_, common::Compose(common::Inverse(Frame(i)), Truth(i, k)), cov);
+      e.pose = common::Compose(SamplePose(&rng_, common::Compose(common::Inverse(Frame(i)), Truth(i, k)), cov),
+                               pose_error_[i]);
       common::LidarScan scan;
       scan.stamp = {scenario_.robots[i].id, k, e.time_s};
       for (std::size_t j = 0; j < n; ++j) {
@@ -558,6 +563,7 @@ class Sim {
   std::vector<std::unique_ptr<Cooperation>> agents_;
   std::vector<std::unique_ptr<FakeFilter>> filters_;
   std::vector<PeerInbox> inbox_;
+  std::vector<Pose2> pose_error_;
   std::uint32_t step_ = 0;
 };
 
@@ -666,6 +672,26 @@ TEST(Cooperation, RendezvousRepeatsOnlyAfterTheMinimumInterval) {
   EXPECT_EQ(sim.agent(1).rendezvous()[1].step, 40u);
   EXPECT_EQ(sim.sent_maps, 4);
   EXPECT_EQ(sim.filter(0).merges, 2);
+}
+
+// A snapshot is merged only while the sender's mutual detections agree with the transform held
+// to its frame: here r2 is 1.5 m and 0.3 rad off in its own frame at the second rendezvous (its
+// covariance does not say so), the detections fall outside the transform gate, and neither
+// robot merges the other's map there; the frames stay known.
+TEST(Cooperation, NoMergeWhileTheSendersDetectionsDisagreeWithTheTransform) {
+  for (const bool lost : {false, true}) {
+    Sim sim(
+        Scenario(2), [](std::uint32_t k, int, int) { return (k >= 14 && k <= 16) || (k >= 40 && k <= 41); }, 5);
+    sim.Run(30);
+    EXPECT_EQ(sim.filter(0).merges, 1);
+    if (lost) sim.SetPoseError(1, {1.5, 0.0, 0.3});
+    sim.Run(20);
+    ASSERT_EQ(sim.agent(0).rendezvous().size(), 2u);
+    EXPECT_EQ(sim.sent_maps, 4);
+    EXPECT_EQ(sim.filter(0).merges, lost ? 1 : 2) << "lost " << lost;
+    EXPECT_EQ(sim.filter(1).merges, lost ? 1 : 2) << "lost " << lost;
+    EXPECT_EQ(sim.agent(0).frames_known(), std::vector<std::string>{"r2"});
+  }
 }
 
 TEST(Cooperation, NothingBeforeTheDetectorIsEnabled) {
