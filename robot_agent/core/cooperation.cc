@@ -398,7 +398,7 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
 }
 
 bool Cooperation::Refining(const PeerState& peer, std::uint32_t step) const {
-  return peer.event_index >= 0 && step <= peer.encounter_first + kEncounterRefineSteps;
+  return peer.event_index >= 0 && WithinRefinement(peer.encounter_first, step);
 }
 
 void Cooperation::HoldTransform(PeerState* peer, const TransformEstimate& t, std::uint32_t step) {
@@ -577,8 +577,9 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, SlamFilter* filter) {
     k.transform = k.transform ? FuseSplitCi(*k.transform, chained) : chained;
     k.transform_step = m.header.step;
   }
-  if (!scenario_.cooperation.merge_maps || filter == nullptr || m.landmarks.empty() || sender.last_detection_outlier)
+  if (!scenario_.cooperation.merge_maps || filter == nullptr || m.landmarks.empty() || sender.last_detection_outlier) {
     return;
+  }
   std::vector<MapLandmark> moved;
   moved.reserve(m.landmarks.size());
   const Eigen::Matrix3d t_cov = t_self_sender.Covariance();

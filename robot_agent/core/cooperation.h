@@ -41,9 +41,12 @@ class Cooperation {
   std::vector<LandmarkMovedNotice> MovedNotices(const std::vector<MovedLandmark>& moved, std::uint32_t step,
                                                 double time_s) const;
 
-  // The transform of a rendezvous is refined over its encounter's first steps (DESIGN.md: it is
-  // scored after 10), then held as it is in rendezvous().
-  static constexpr int kEncounterRefineSteps = 10;
+  // Whether an estimate made at step still refines the rendezvous of an encounter that began at
+  // encounter_first: its transform is refined over the encounter's first kEncounterRefineSteps
+  // steps (DESIGN.md scores it after them), then held as it is in rendezvous().
+  static bool WithinRefinement(std::uint32_t encounter_first, std::uint32_t step) {
+    return step <= encounter_first + kEncounterRefineSteps;
+  }
 
   // Every rendezvous so far (for the estimate stream and the log), and the frames known.
   const std::vector<RendezvousEvent>& rendezvous() const;
@@ -67,6 +70,8 @@ class Cooperation {
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
   };
   // Everything known about one peer.
+  static constexpr std::uint32_t kEncounterRefineSteps = 10;
+
   struct PeerState {
     std::optional<TransformEstimate> transform;  // T(G_self <- G_peer)
     bool met = false;                            // from own mutual detections (else chained)
@@ -127,8 +132,7 @@ class Cooperation {
   std::optional<MapReference::Kinematics> JointKinematics(const MapLandmark& l) const;
   // Keeps the step in the own history (while it is usable for the joint estimate).
   void Record(const common::SensorStep& step, const FilterEstimate& estimate);
-  // Whether an estimate made at step still refines the peer's current rendezvous event (the
-  // first kEncounterRefineSteps steps of the encounter).
+  // Whether an estimate made at step still refines the peer's current rendezvous event.
   bool Refining(const PeerState& peer, std::uint32_t step) const;
   // Holds t as the transform to peer, estimated at step (and as the event's, while refining).
   void HoldTransform(PeerState* peer, const TransformEstimate& t, std::uint32_t step);

@@ -147,6 +147,7 @@ std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const st
                                 double gate_d2, double too_close_m) {
   // (distance, incoming, own); identity matches get distance -1 so that they come first.
   std::vector<std::tuple<double, int, int>> pairs;
+  std::vector<char> near(incoming.size(), 0);  // static, within too_close_m of a static own one
   for (int i = 0; i < static_cast<int>(incoming.size()); ++i) {
     const MatchCandidate& in = incoming[i];
     for (int j = 0; j < static_cast<int>(own.size()); ++j) {
@@ -160,6 +161,7 @@ std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const st
         continue;
       }
       const Eigen::Vector2d d = in.position - o.position;
+      if (in.stationary && o.stationary && d.norm() < too_close_m) near[i] = 1;
       const Eigen::Matrix2d s = in.covariance + o.covariance;
       const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
       if (!(det > 0.0)) continue;
@@ -176,13 +178,7 @@ std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const st
     own_used[j] = 1;
   }
   for (std::size_t i = 0; i < incoming.size(); ++i) {
-    if (match[i] >= 0 || incoming[i].landmark_id >= 0 || !incoming[i].stationary) continue;
-    for (const MatchCandidate& o : own) {
-      if (o.stationary && (incoming[i].position - o.position).norm() < too_close_m) {
-        match[i] = kTooClose;
-        break;
-      }
-    }
+    if (match[i] < 0 && near[i] && incoming[i].landmark_id < 0) match[i] = kTooClose;
   }
   return match;
 }

@@ -82,8 +82,8 @@ class SlamFilter {
   // landmark is gated against the own landmarks (squared Mahalanobis distance of the positions
   // under the sum of their covariances within the chi-square 2 dof quantile of gate_probability;
   // reported identities decide when both carry one); matched landmarks are fused by rule
-  // (map_fusion.h), unmatched ones are added, except those within too_close_m of an own
-  // landmark (MatchLandmarks' kTooClose), which are left out. Returns how many were added.
+  // (map_fusion.h), unmatched ones are added, except static ones within too_close_m of a static
+  // own landmark (MatchLandmarks' kTooClose), which are left out. Returns how many were added.
   virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
                              double gate_probability, double too_close_m) = 0;
 

@@ -214,7 +214,7 @@ struct AgentNode::Impl {
     const auto& events = cooperation.rendezvous();
     for (; rendezvous_logged < events.size(); ++rendezvous_logged) {
       const RendezvousEvent& e = events[rendezvous_logged];
-      if (!last && step <= e.step + Cooperation::kEncounterRefineSteps) return;
+      if (!last && Cooperation::WithinRefinement(e.step, step)) return;
       const Eigen::Vector3d sd = e.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
       spdlog::info(
           "rendezvous with {} at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad), sd ({:.3f} m, {:.3f} m, "
