@@ -39,11 +39,13 @@
 #include <thread>
 #include <vector>
 
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
 #include "common/config/scenario_options.h"
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
+#include "common/progress_line.h"
 #include "mrslamPubSubTypes.h"
 #include "robot_agent/core/slam_filter.h"
 #include "robot_agent/node/msg_conversion.h"
@@ -508,6 +510,7 @@ int Main(int argc, char** argv) {
   int done = 0, cells_done = 0;
   std::mutex mutex;
   std::string error;
+  common::ProgressLine progress;
   const auto start = std::chrono::steady_clock::now();
   auto worker = [&]() {
     for (int j = next++; j < num_jobs; j = next++) {
@@ -527,16 +530,16 @@ int Main(int argc, char** argv) {
       if (--cell_left[cell] == 0) ++cells_done;
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const double left = elapsed / done * (num_jobs - done);
-      std::fprintf(stderr, "\rcells %d/%d, runs %d/%d, elapsed %.0f s, left ~%.0f s   ", cells_done, num_cells, done,
-                   num_jobs, elapsed, left);
-      std::fflush(stderr);
+      progress.Show(fmt::format("cells {}/{}, runs {}/{}, elapsed {:.0f} s, left ~{:.0f} s", cells_done, num_cells,
+                                done, num_jobs, elapsed, left),
+                    done == num_jobs);
     }
   };
   std::vector<std::thread> pool;
   pool.reserve(static_cast<std::size_t>(std::min(threads, num_jobs)));
   for (int t = 0; t < std::min(threads, num_jobs); ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
-  std::fprintf(stderr, "\n");
+  progress.Finish();
   if (!error.empty()) throw std::runtime_error(error);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

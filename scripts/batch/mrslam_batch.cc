@@ -34,6 +34,7 @@
 
 #include "common/angles.h"
 #include "common/config/scenario_options.h"
+#include "common/progress_line.h"
 #include "common/se2.h"
 #include "robot_agent/core/map_reference.h"
 #include "robot_agent/core/slam_filter.h"
@@ -286,6 +287,7 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   std::vector<std::vector<common::Pose2>> truth(n);  // in each robot's own frame, steps 1..
   common::GroundTruth last_truth;
   const int solve_every = std::max(1, static_cast<int>(std::lround(kSolveEveryS / options.run.dt_s)));
+  common::ProgressLine line;
   for (int k = 1; k <= options.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();
     last_truth = source->Truth();
@@ -298,8 +300,9 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
       joint.Solve();
       for (auto& a : alone) a->Solve();
       if (progress) {
-        std::fprintf(stderr, "\r%s: step %d/%d solved ", calibrate ? "odometry calibrated" : "as configured", k,
-                     options.run.steps);
+        line.Show(std::string(calibrate ? "odometry calibrated" : "as configured") + ": step " + std::to_string(k) +
+                      "/" + std::to_string(options.run.steps) + " solved",
+                  k == options.run.steps);
       }
     }
   }
@@ -343,6 +346,7 @@ void ForEachSeed(int num_seeds, int threads, const Fn& fn) {
   std::atomic<int> done{0};
   std::mutex error_mutex;
   std::string error;
+  common::ProgressLine progress;
   auto worker = [&]() {
     for (int s = next++; s < num_seeds; s = next++) {
       try {
@@ -355,15 +359,14 @@ void ForEachSeed(int num_seeds, int threads, const Fn& fn) {
       }
       const int d = ++done;
       const std::lock_guard<std::mutex> lock(error_mutex);
-      std::fprintf(stderr, "\rseeds done: %d/%d", d, num_seeds);
-      std::fflush(stderr);
+      progress.Show("seeds done: " + std::to_string(d) + "/" + std::to_string(num_seeds), d == num_seeds);
     }
   };
   std::vector<std::thread> pool;
   pool.reserve(std::min(threads, num_seeds));
   for (int t = 0; t < std::min(threads, num_seeds); ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
-  std::fprintf(stderr, "\n");
+  progress.Finish();
   if (!error.empty()) throw std::runtime_error(error);
 }
 

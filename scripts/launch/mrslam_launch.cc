@@ -23,6 +23,7 @@
 #include "common/app.h"
 #include "common/config/scenario_options.h"
 #include "common/dds/participant.h"
+#include "common/progress_line.h"
 #include "scripts/launch/domain_picker.h"
 #include "scripts/launch/process_supervisor.h"
 #include "scripts/launch/progress_monitor.h"
@@ -86,44 +87,26 @@ std::vector<long long> ParseSeeds(const std::string& text) {
   return seeds;
 }
 
-// Shows the progress line on stderr: rewritten in place on a terminal (at most 4 times a
-// second), else a new line at most every 2 s and only when something changed.
+// Shows a run's progress (common::ProgressLine); off a terminal only when something changed.
 class ProgressPrinter {
  public:
-  explicit ProgressPrinter(std::string prefix) : prefix_(std::move(prefix)), tty_(isatty(STDERR_FILENO) == 1) {}
-  ~ProgressPrinter() { Finish(); }
-  ProgressPrinter(const ProgressPrinter&) = delete;
-  ProgressPrinter& operator=(const ProgressPrinter&) = delete;
+  explicit ProgressPrinter(std::string prefix) : prefix_(std::move(prefix)) {}
 
   void Show(const Progress& p, int total_steps, double elapsed_s, std::optional<double> left_s) {
-    const auto now = Clock::now();
-    const auto period = tty_ ? std::chrono::milliseconds(250) : std::chrono::milliseconds(2000);
-    if (now - last_print_ < period) return;
-    if (!tty_ && p.steps_done == last_steps_ && p.rendezvous == last_rendezvous_) return;
-    std::string line = prefix_ + "step " + std::to_string(p.steps_done) + "/" + std::to_string(total_steps) +
-                       ", rendezvous so far " + std::to_string(p.rendezvous) + ", elapsed " + FormatSeconds(elapsed_s) +
-                       ", time left " + (left_s ? "~" + FormatSeconds(*left_s) : std::string("?"));
-    if (tty_) {
-      std::cerr << "\r\033[K" << line << std::flush;
-      line_open_ = true;
-    } else {
-      std::cerr << line << "\n" << std::flush;
-    }
-    last_print_ = now;
+    if (!line_.tty() && p.steps_done == last_steps_ && p.rendezvous == last_rendezvous_) return;
+    const std::string line = prefix_ + "step " + std::to_string(p.steps_done) + "/" + std::to_string(total_steps) +
+                             ", rendezvous so far " + std::to_string(p.rendezvous) + ", elapsed " +
+                             FormatSeconds(elapsed_s) + ", time left " +
+                             (left_s ? "~" + FormatSeconds(*left_s) : std::string("?"));
+    if (!line_.Show(line)) return;
     last_steps_ = p.steps_done;
     last_rendezvous_ = p.rendezvous;
   }
-  // Ends an in-place line so that what follows starts on its own line.
-  void Finish() {
-    if (line_open_) std::cerr << "\n" << std::flush;
-    line_open_ = false;
-  }
+  void Finish() { line_.Finish(); }
 
  private:
   std::string prefix_;
-  bool tty_;
-  bool line_open_ = false;
-  Clock::time_point last_print_{};
+  common::ProgressLine line_;
   int last_steps_ = -1;
   int last_rendezvous_ = -1;
 };
