@@ -347,7 +347,10 @@ int Main(const LaunchFlags& flags) {
   fs::create_directories(out_dir);
   const auto& stop = common::InstallStopHandler();
 
+  // A seed that fails does not end a multi-seed run: the others go on, the aggregate is over the
+  // seeds that finished and names the failed ones, and the exit code says that one failed.
   std::vector<json> summaries;
+  std::vector<long long> finished, failed;
   for (const long long seed : seeds) {
     const int domain = domain_given ? given_domain : PickFreeDomain(getpid());
     if (domain < 0) {
@@ -361,6 +364,11 @@ int Main(const LaunchFlags& flags) {
     json summary;
     const std::string prefix = multi ? "[seed " + std::to_string(seed) + "] " : "";
     const int code = RunSeed(flags, scenario, scenario_path, seed, domain, dir, prefix, stop, &summary);
+    if (code == kFailed && multi) {
+      failed.push_back(seed);
+      std::cerr << kName << ": seed " << seed << " failed; going on with the next seeds\n";
+      continue;
+    }
     if (code != kOk) return code;
 
     std::vector<std::string> plots;
@@ -382,19 +390,28 @@ int Main(const LaunchFlags& flags) {
       std::cout << std::flush;
     }
     summaries.push_back(std::move(summary));
+    finished.push_back(seed);
   }
 
   if (multi) {
-    const json aggregate = Aggregate(summaries, seeds);
+    json aggregate = Aggregate(summaries, finished);
+    aggregate["failed_seeds"] = failed;
     const std::string path = out_dir + "/aggregate.json";
     std::ofstream out(path);
     out << aggregate.dump(2) << "\n";
     out.close();
     if (!out) throw std::runtime_error("cannot write " + path);
     std::cout << "\nScenario '" << scenario.name << "', seeds " << seeds.front() << ".." << seeds.back() << " ("
-              << seeds.size() << " runs): median and 90th percentile over seeds\n\n"
+              << finished.size() << " runs): median and 90th percentile over seeds\n\n"
               << AggregateTable(aggregate) << "\nAggregate: " << path << "\n"
               << std::flush;
+    if (!failed.empty()) {
+      std::string list;
+      for (const long long seed : failed) list += (list.empty() ? "" : ", ") + std::to_string(seed);
+      std::cerr << kName << ": error: " << failed.size() << " of " << seeds.size() << " seeds failed (" << list
+                << "; logs in " << out_dir << "/seed-<S>/logs)\n";
+      return kFailed;
+    }
   }
   return kOk;
 }

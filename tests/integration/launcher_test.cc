@@ -39,6 +39,7 @@ constexpr int kKillDomain = 121;
 constexpr int kSigintDomain = 122;
 constexpr int kBadInputDomain = 123;
 constexpr int kSeedsDomain = 124;
+constexpr int kSeedFailsDomain = 125;
 
 constexpr int kShortSteps = 12;
 
@@ -356,6 +357,44 @@ TEST(LauncherTest, SeedsRunInTurnAndAggregate) {
     }
   }
   EXPECT_THAT(ReadFile(out + ".log"), HasSubstr("median"));
+  std::filesystem::remove_all(out);
+  std::filesystem::remove(out + ".log");
+}
+
+TEST(LauncherTest, AFailedSeedDoesNotEndTheOthersAndTheAggregateNamesIt) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string out = testing::MakeTempDir("mrslam-launch-seed-fails");
+  // Long enough that seed 1 is still going when its agent is killed right after step 3.
+  ChildProcess launcher(LaunchArgs(out, kSeedFailsDomain, {"--set", "run.steps=400", "--seeds", "1..2", "--no-plots"}),
+                        out + ".log");
+  ASSERT_TRUE(launcher.started());
+  ASSERT_TRUE(WaitForEstimateStep(kSeedFailsDomain, "r2", 3, launcher, seconds(120))) << ReadFile(out + ".log");
+  const auto children = WaitForChildren(launcher.pid(), 4, seconds(10));
+  ASSERT_EQ(children.size(), 4u);
+  pid_t victim = 0;
+  for (const auto& [pid, cmd] : children) {
+    if (cmd.find("robot_agent") != std::string::npos && cmd.find("--robot r2") != std::string::npos) victim = pid;
+  }
+  ASSERT_NE(victim, 0);
+  const auto groups = GroupsOf(children);
+  ASSERT_EQ(kill(victim, SIGKILL), 0);
+
+  const auto code = launcher.WaitExit(seconds(300));
+  ASSERT_TRUE(code.has_value()) << "the launcher did not stop";
+  EXPECT_EQ(*code, 1) << ReadFile(out + ".log");
+  const std::string output = ReadFile(out + ".log");
+  EXPECT_THAT(output, HasSubstr("seed 1 failed; going on with the next seeds"));
+  EXPECT_THAT(output, HasSubstr("1 of 2 seeds failed (1;"));
+  EXPECT_TRUE(NoneLeft(children, groups));
+  const auto s2 = nlohmann::json::parse(ReadFile(out + "/seed-2/summary.json"));
+  EXPECT_EQ(s2.value("seed", -1), 2);
+  EXPECT_EQ(s2.value("steps", -1), 400);
+  nlohmann::json aggregate;
+  ASSERT_NO_THROW(aggregate = nlohmann::json::parse(ReadFile(out + "/aggregate.json")));
+  EXPECT_EQ(aggregate["seeds"], nlohmann::json({2}));
+  EXPECT_EQ(aggregate["failed_seeds"], nlohmann::json({1}));
+  EXPECT_EQ(aggregate["runs"], 1);
+  EXPECT_TRUE(aggregate["robots"]["r1"]["position_rmse_m"]["median"].is_number());
   std::filesystem::remove_all(out);
   std::filesystem::remove(out + ".log");
 }
