@@ -26,7 +26,11 @@ if [[ ! -x "$build/bin/mrslam_grid" ]]; then
   echo "experiment_grid.sh: $build/bin/mrslam_grid is missing; run scripts/build.sh first" >&2
   exit 1
 fi
+# Exit code 3: some runs failed; the others are in grid.csv and get their plots and tables.
+status=0
 "$build/bin/mrslam_grid" --scenario "$root/config/dynamic_world.yaml" --out "$out" --runs "$runs" \
-  --threads "$(nproc)" "${extra[@]}"
+  --threads "$(nproc)" "${extra[@]}" || status=$?
+if [[ $status -ne 0 && $status -ne 3 ]]; then exit "$status"; fi
 /usr/bin/python3 "$root/scripts/plot_grid.py" "$out"
 cat "$out/tables.md"
+exit "$status"

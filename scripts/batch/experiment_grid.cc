@@ -71,6 +71,9 @@ struct Job {
 };
 
 // Its metrics: averages over the robots, then per robot.
+// Exit code when the grid ran but some of its runs failed (grid.csv and tables.md hold the others).
+constexpr int kSomeRunsFailed = 3;
+
 struct Row {
   double landmark_rmse_m = 0.0;
   double robot_rmse_m = 0.0;
@@ -80,6 +83,7 @@ struct Row {
   double moving_flag_share = 0.0;  // reported moving landmarks / reported landmarks, over frames
   double mapped_at_end = 0.0;      // landmarks in the map at the end, mean over robots
   double seconds = 0.0;
+  bool failed = false;  // the run threw: left out of grid.csv and of the means
 };
 
 double Mean(const std::vector<double>& v) {
@@ -336,9 +340,15 @@ std::vector<std::string> Split(const std::string& text) {
 using CellKey = std::tuple<std::string, int, int>;
 
 void WriteTables(const std::string& path, const std::vector<Job>& jobs, const std::vector<Row>& rows,
-                 const std::vector<std::string>& filters, int runs, int frames, int particles, double seconds) {
+                 const std::vector<std::string>& filters, int runs, int frames, int particles, double seconds,
+                 bool multi_process) {
   std::map<CellKey, std::vector<const Row*>> cells;
+  std::size_t failed = 0;
   for (std::size_t j = 0; j < jobs.size(); ++j) {
+    if (rows[j].failed) {
+      ++failed;
+      continue;
+    }
     cells[{jobs[j].filter, jobs[j].dynamism_index, jobs[j].speed_index}].push_back(&rows[j]);
   }
   auto mean_of = [&](const std::string& f, int d, int s, double Row::*field) {
@@ -349,12 +359,14 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
   char buf[256];
-  out << "# Paper B's grid (in-process)\n\n";
+  out << "# Paper B's grid (" << (multi_process ? "multi-process" : "in-process") << ")\n\n";
   out << "Means over " << runs << " runs (seeds 1.." << runs << ") of " << frames
       << " frames, 3 robots; rows: dynamism (share of moving landmarks), columns: landmark speed (m/s). "
       << "fastslam with constant_turn_rate tracking and " << particles << " particles. ";
-  std::snprintf(buf, sizeof(buf), "Wall time of the grid: %.0f s.\n\n", seconds);
+  std::snprintf(buf, sizeof(buf), "Wall time of the grid: %.0f s.", seconds);
   out << buf;
+  if (failed > 0) out << " " << failed << " of " << jobs.size() << " runs failed and are left out of the means.";
+  out << "\n\n";
   // One markdown table in paper B's layout: rows dynamism, columns speed, cell(d, s) as text.
   auto table = [&](const std::string& heading, const std::function<std::string(int, int)>& cell) {
     out << "## " << heading << "\n\n| dynamism |";
@@ -401,7 +413,8 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
           [&](int d, int sp) { return per_filter([&](const std::string& f) { return mean_of(f, d, sp, m.field); }); });
   }
   // Per robot (paper B's tables 2-4): robot position RMSE.
-  const std::size_t num_robots = rows.empty() ? 0 : rows[0].robot_rmse_per_robot_m.size();
+  std::size_t num_robots = 0;
+  for (const Row& r : rows) num_robots = std::max(num_robots, r.robot_rmse_per_robot_m.size());
   for (std::size_t robot = 0; robot < num_robots; ++robot) {
     table("Position RMSE (m) of robot " + std::to_string(robot + 1) + ": " + filter_names, [&](int d, int sp) {
       return per_filter([&](const std::string& f) {
@@ -509,21 +522,29 @@ int Main(int argc, char** argv) {
   std::atomic<int> next{0};
   int done = 0, cells_done = 0;
   std::mutex mutex;
-  std::string error;
+  int failed = 0;
+  std::string first_error;
   common::ProgressLine progress;
   const auto start = std::chrono::steady_clock::now();
   auto worker = [&]() {
     for (int j = next++; j < num_jobs; j = next++) {
+      // A run that fails is counted and left out; the others go on.
       Row row;
+      std::string error;
       try {
         row = multi_process ? RunJobMultiProcess(options, setup, jobs[j], frames) : RunJob(options, jobs[j], frames);
       } catch (const std::exception& e) {
-        const std::lock_guard<std::mutex> lock(mutex);
         error = e.what();
-        next = num_jobs;
-        return;
+        row.failed = true;
       }
       const std::lock_guard<std::mutex> lock(mutex);
+      if (row.failed) {
+        progress.Finish();
+        std::fprintf(stderr, "mrslam_grid: run %d of %s at dynamism %g, speed %g m/s failed: %s\n", jobs[j].run,
+                     jobs[j].filter.c_str(), kDynamism[jobs[j].dynamism_index], kSpeeds[jobs[j].speed_index],
+                     error.c_str());
+        if (failed++ == 0) first_error = error;
+      }
       rows[j] = row;
       ++done;
       const int cell = jobs[j].dynamism_index * static_cast<int>(kSpeeds.size()) + jobs[j].speed_index;
@@ -540,7 +561,6 @@ int Main(int argc, char** argv) {
   for (int t = 0; t < std::min(threads, num_jobs); ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
   progress.Finish();
-  if (!error.empty()) throw std::runtime_error(error);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   const std::string csv_path = out_dir + "/grid.csv";
@@ -558,6 +578,7 @@ int Main(int argc, char** argv) {
   };
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     const Row& r = rows[j];
+    if (r.failed) continue;
     csv << jobs[j].filter << "," << num(kDynamism[jobs[j].dynamism_index]) << "," << num(kSpeeds[jobs[j].speed_index])
         << "," << jobs[j].run << "," << num(r.landmark_rmse_m) << "," << num(r.robot_rmse_m) << ","
         << num(r.static_completeness) << "," << num(r.static_only_completeness);
@@ -566,9 +587,15 @@ int Main(int argc, char** argv) {
     for (const double v : r.robot_completeness) csv << "," << num(v);
     csv << "," << num(r.moving_flag_share) << "," << num(r.mapped_at_end) << "," << num(r.seconds) << "\n";
   }
-  WriteTables(out_dir + "/tables.md", jobs, rows, filters, runs, frames, particles, seconds);
+  WriteTables(out_dir + "/tables.md", jobs, rows, filters, runs, frames, particles, seconds, multi_process);
   std::printf("grid: %d runs in %.0f s; wrote %s/grid.csv and %s/tables.md\n", num_jobs, seconds, out_dir.c_str(),
               out_dir.c_str());
+  std::fflush(stdout);
+  if (failed > 0) {
+    std::fprintf(stderr, "mrslam_grid: error: %d of %d runs failed, left out of grid.csv and tables.md (first: %s)\n",
+                 failed, num_jobs, first_error.c_str());
+    return kSomeRunsFailed;
+  }
   return 0;
 }
 

@@ -9,8 +9,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -111,5 +113,20 @@ inline void ExpectOneLineError(ChildProcess& process, const std::string& log_pat
 
 // A fresh temporary directory for a test's logs and outputs.
 std::string MakeTempDir(const std::string& prefix);
+
+// The children of a process (from /proc), with their command lines.
+std::map<pid_t, std::string> ChildrenOf(pid_t parent);
+
+// Waits until the process has at least `count` children (or the timeout) and returns them.
+std::map<pid_t, std::string> WaitForChildren(pid_t parent, std::size_t count, std::chrono::milliseconds timeout);
+
+// The first of the processes whose command line holds every one of `parts`; 0 if none.
+pid_t FindProcess(const std::map<pid_t, std::string>& processes, const std::vector<std::string>& parts);
+
+// The process groups of the processes.
+std::set<pid_t> GroupsOf(const std::map<pid_t, std::string>& processes);
+
+// True when neither the processes nor any member of their process groups still exist.
+::testing::AssertionResult NoneLeft(const std::map<pid_t, std::string>& processes, const std::set<pid_t>& groups);
 
 }  // namespace mrslam::testing

@@ -2,6 +2,7 @@
 // (world_sim + one robot_agent per robot, over DDS, on a free domain the tool picks) score
 // exactly what the in-process run scores, and the processes leave nothing behind.
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <filesystem>
 #include <string>
@@ -69,6 +70,37 @@ TEST(GridMultiProcessTest, ScoresTheSameAsInProcess) {
   for (const auto& entry : std::filesystem::directory_iterator(dir + "/mp/logs")) logs += entry.is_regular_file();
   EXPECT_EQ(logs, (in_process.size() - 1) * (1 + robots));
   std::filesystem::remove_all(dir);
+}
+
+// A run whose agent dies is counted and left out; the grid goes on with the others, writes what
+// it has and exits 3 naming the run.
+TEST(GridMultiProcessTest, AFailedRunIsLeftOutAndTheOthersGoOn) {
+  unsetenv("MRSLAM_DOMAIN");
+  const std::string dir = testing::MakeTempDir("mrslam-grid-fails");
+  // Long enough that the first run is still going when its agent is killed.
+  ChildProcess grid(
+      {BinPath("mrslam_grid"), "--scenario", SourcePath("config/dynamic_world.yaml"), "--out", dir, "--runs", "2",
+       "--frames", "400", "--dynamism", "0.5", "--speeds", "0.5", "--filters", "ekf", "--multi-process"},
+      dir + ".log");
+  ASSERT_TRUE(grid.started());
+  const auto children = testing::WaitForChildren(grid.pid(), 4, seconds(30));
+  const pid_t victim = testing::FindProcess(children, {"robot_agent", "--robot r2", "--seed 1 "});
+  ASSERT_NE(victim, 0) << testing::ReadFile(dir + ".log");
+  const auto groups = testing::GroupsOf(children);
+  ASSERT_EQ(kill(victim, SIGKILL), 0);
+
+  EXPECT_EQ(grid.WaitExit(seconds(120)), std::optional<int>(3)) << testing::ReadFile(dir + ".log");
+  const std::string log = testing::ReadFile(dir + ".log");
+  EXPECT_NE(log.find("run 1 of ekf at dynamism 0.5, speed 0.5 m/s failed"), std::string::npos) << log;
+  EXPECT_NE(log.find("1 of 2 runs failed"), std::string::npos) << log;
+  EXPECT_TRUE(testing::NoneLeft(children, groups));
+  const auto rows = RowsWithoutSeconds(testing::ReadFile(dir + "/grid.csv"));
+  ASSERT_EQ(rows.size(), 2u);  // header + run 2
+  EXPECT_EQ(rows[1].rfind("ekf,0.5,0.5,2,", 0), 0u) << rows[1];
+  EXPECT_NE(testing::ReadFile(dir + "/tables.md").find("1 of 2 runs failed and are left out of the means"),
+            std::string::npos);
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove(dir + ".log");
 }
 
 }  // namespace

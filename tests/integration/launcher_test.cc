@@ -4,14 +4,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <dirent.h>
 #include <signal.h>
-#include <sys/stat.h>
 
-#include <cerrno>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -29,9 +25,14 @@ using std::chrono::milliseconds;
 using std::chrono::seconds;
 using testing::BinPath;
 using testing::ChildProcess;
+using testing::ChildrenOf;
+using testing::FindProcess;
+using testing::GroupsOf;
 using ::testing::HasSubstr;
+using testing::NoneLeft;
 using testing::ReadFile;
 using testing::SourcePath;
+using testing::WaitForChildren;
 
 // This test's own DDS domains: 120..129.
 constexpr int kSummaryDomain = 120;
@@ -42,62 +43,6 @@ constexpr int kSeedsDomain = 124;
 constexpr int kSeedFailsDomain = 125;
 
 constexpr int kShortSteps = 12;
-
-// A process as /proc/<pid>/stat shows it.
-struct ProcInfo {
-  pid_t pid = 0;
-  pid_t ppid = 0;
-  pid_t pgid = 0;
-  char state = '?';
-};
-
-std::optional<ProcInfo> ReadProc(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string text;
-  if (!std::getline(in, text)) return std::nullopt;
-  const auto close = text.rfind(')');  // the command name may hold spaces and parentheses
-  if (close == std::string::npos) return std::nullopt;
-  std::istringstream rest(text.substr(close + 1));
-  ProcInfo info;
-  info.pid = pid;
-  rest >> info.state >> info.ppid >> info.pgid;
-  return info;
-}
-
-std::string CommandLine(pid_t pid) {
-  std::string cmd = ReadFile("/proc/" + std::to_string(pid) + "/cmdline");
-  for (char& c : cmd) c = c == '\0' ? ' ' : c;
-  return cmd;
-}
-
-// The children of a process (from /proc), with their command lines.
-std::map<pid_t, std::string> ChildrenOf(pid_t parent) {
-  std::map<pid_t, std::string> children;
-  DIR* dir = opendir("/proc");
-  if (dir == nullptr) return children;
-  while (dirent* entry = readdir(dir)) {
-    char* end = nullptr;
-    const long pid = std::strtol(entry->d_name, &end, 10);
-    if (end == entry->d_name || *end != '\0') continue;
-    const auto info = ReadProc(static_cast<pid_t>(pid));
-    if (info && info->ppid == parent) children[info->pid] = CommandLine(info->pid);
-  }
-  closedir(dir);
-  return children;
-}
-
-// True when neither the processes nor any member of their process groups still exist.
-::testing::AssertionResult NoneLeft(const std::map<pid_t, std::string>& processes, const std::set<pid_t>& groups) {
-  for (const auto& [pid, cmd] : processes) {
-    if (ReadProc(pid)) return ::testing::AssertionFailure() << "process " << pid << " is still there: " << cmd;
-  }
-  for (const pid_t group : groups) {
-    if (kill(-group, 0) == 0 || errno != ESRCH) {
-      return ::testing::AssertionFailure() << "process group " << group << " still has members";
-    }
-  }
-  return ::testing::AssertionSuccess();
-}
 
 std::vector<std::string> LaunchArgs(const std::string& out, int domain, const std::vector<std::string>& extra) {
   std::vector<std::string> argv = {BinPath("mrslam_launch"),
@@ -140,24 +85,6 @@ bool WaitForEstimateStep(int domain, const std::string& robot, std::uint32_t ste
 }
 
 // The launcher's children once all of them (evaluator, world_sim, one agent per robot) run.
-std::map<pid_t, std::string> WaitForChildren(pid_t launcher, std::size_t count, seconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  auto children = ChildrenOf(launcher);
-  while (children.size() < count && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(milliseconds(20));
-    children = ChildrenOf(launcher);
-  }
-  return children;
-}
-
-std::set<pid_t> GroupsOf(const std::map<pid_t, std::string>& processes) {
-  std::set<pid_t> groups;
-  for (const auto& [pid, cmd] : processes) {
-    if (const auto info = ReadProc(pid)) groups.insert(info->pgid);
-  }
-  return groups;
-}
-
 void ExpectFiniteAtLeast(const nlohmann::json& robot, const std::string& key, double min, const std::string& id) {
   ASSERT_TRUE(robot.contains(key)) << id << " lacks " << key;
   ASSERT_TRUE(robot[key].is_number()) << id << "." << key << " = " << robot[key].dump();
@@ -272,10 +199,7 @@ TEST(LauncherTest, KilledAgentStopsTheRunNamingItAndLeavesNoProcess) {
   ASSERT_TRUE(WaitForEstimateStep(kKillDomain, "r2", 3, launcher, seconds(120))) << ReadFile(out + ".log");
   const auto children = WaitForChildren(launcher.pid(), 4, seconds(10));
   ASSERT_EQ(children.size(), 4u);
-  pid_t victim = 0;
-  for (const auto& [pid, cmd] : children) {
-    if (cmd.find("robot_agent") != std::string::npos && cmd.find("--robot r2") != std::string::npos) victim = pid;
-  }
+  const pid_t victim = FindProcess(children, {"robot_agent", "--robot r2"});
   ASSERT_NE(victim, 0);
   const auto groups = GroupsOf(children);
   ASSERT_EQ(kill(victim, SIGKILL), 0);
@@ -371,10 +295,7 @@ TEST(LauncherTest, AFailedSeedDoesNotEndTheOthersAndTheAggregateNamesIt) {
   ASSERT_TRUE(WaitForEstimateStep(kSeedFailsDomain, "r2", 3, launcher, seconds(120))) << ReadFile(out + ".log");
   const auto children = WaitForChildren(launcher.pid(), 4, seconds(10));
   ASSERT_EQ(children.size(), 4u);
-  pid_t victim = 0;
-  for (const auto& [pid, cmd] : children) {
-    if (cmd.find("robot_agent") != std::string::npos && cmd.find("--robot r2") != std::string::npos) victim = pid;
-  }
+  const pid_t victim = FindProcess(children, {"robot_agent", "--robot r2"});
   ASSERT_NE(victim, 0);
   const auto groups = GroupsOf(children);
   ASSERT_EQ(kill(victim, SIGKILL), 0);
