@@ -85,6 +85,25 @@ bool WaitForEstimateStep(int domain, const std::string& robot, std::uint32_t ste
 }
 
 // The launcher's children once all of them (evaluator, world_sim, one agent per robot) run.
+// The launcher's children when r2's agent was killed, and their process groups.
+struct KilledAgent {
+  std::map<pid_t, std::string> children;
+  std::set<pid_t> groups;
+};
+
+// Waits until r2's agent has published step 3 (of a run long enough to be still going), then
+// kills it with SIGKILL.
+void KillAgentAfterStep3(int domain, ChildProcess& launcher, const std::string& log, KilledAgent* killed) {
+  ASSERT_TRUE(launcher.started());
+  ASSERT_TRUE(WaitForEstimateStep(domain, "r2", 3, launcher, seconds(120))) << ReadFile(log);
+  killed->children = WaitForChildren(launcher.pid(), 4, seconds(10));
+  ASSERT_EQ(killed->children.size(), 4u);
+  const pid_t victim = FindProcess(killed->children, {"robot_agent", "--robot r2"});
+  ASSERT_NE(victim, 0);
+  killed->groups = GroupsOf(killed->children);
+  ASSERT_EQ(kill(victim, SIGKILL), 0);
+}
+
 void ExpectFiniteAtLeast(const nlohmann::json& robot, const std::string& key, double min, const std::string& id) {
   ASSERT_TRUE(robot.contains(key)) << id << " lacks " << key;
   ASSERT_TRUE(robot[key].is_number()) << id << "." << key << " = " << robot[key].dump();
@@ -195,14 +214,8 @@ TEST(LauncherTest, KilledAgentStopsTheRunNamingItAndLeavesNoProcess) {
   const std::string out = testing::MakeTempDir("mrslam-launch-kill");
   // Long enough that the run is still going when the agent is killed right after step 3.
   ChildProcess launcher(LaunchArgs(out, kKillDomain, {"--set", "run.steps=2000", "--no-plots"}), out + ".log");
-  ASSERT_TRUE(launcher.started());
-  ASSERT_TRUE(WaitForEstimateStep(kKillDomain, "r2", 3, launcher, seconds(120))) << ReadFile(out + ".log");
-  const auto children = WaitForChildren(launcher.pid(), 4, seconds(10));
-  ASSERT_EQ(children.size(), 4u);
-  const pid_t victim = FindProcess(children, {"robot_agent", "--robot r2"});
-  ASSERT_NE(victim, 0);
-  const auto groups = GroupsOf(children);
-  ASSERT_EQ(kill(victim, SIGKILL), 0);
+  KilledAgent killed;
+  ASSERT_NO_FATAL_FAILURE(KillAgentAfterStep3(kKillDomain, launcher, out + ".log", &killed));
 
   const auto code = launcher.WaitExit(seconds(60));
   ASSERT_TRUE(code.has_value()) << "the launcher did not stop";
@@ -212,7 +225,7 @@ TEST(LauncherTest, KilledAgentStopsTheRunNamingItAndLeavesNoProcess) {
   EXPECT_THAT(output, HasSubstr("robot_agent_r2"));
   EXPECT_THAT(output, HasSubstr("signal 9"));
   EXPECT_THAT(output, HasSubstr(out + "/logs/robot_agent_r2.log"));
-  EXPECT_TRUE(NoneLeft(children, groups));
+  EXPECT_TRUE(NoneLeft(killed.children, killed.groups));
   std::filesystem::remove_all(out);
   std::filesystem::remove(out + ".log");
 }
@@ -291,14 +304,8 @@ TEST(LauncherTest, AFailedSeedDoesNotEndTheOthersAndTheAggregateNamesIt) {
   // Long enough that seed 1 is still going when its agent is killed right after step 3.
   ChildProcess launcher(LaunchArgs(out, kSeedFailsDomain, {"--set", "run.steps=400", "--seeds", "1..2", "--no-plots"}),
                         out + ".log");
-  ASSERT_TRUE(launcher.started());
-  ASSERT_TRUE(WaitForEstimateStep(kSeedFailsDomain, "r2", 3, launcher, seconds(120))) << ReadFile(out + ".log");
-  const auto children = WaitForChildren(launcher.pid(), 4, seconds(10));
-  ASSERT_EQ(children.size(), 4u);
-  const pid_t victim = FindProcess(children, {"robot_agent", "--robot r2"});
-  ASSERT_NE(victim, 0);
-  const auto groups = GroupsOf(children);
-  ASSERT_EQ(kill(victim, SIGKILL), 0);
+  KilledAgent killed;
+  ASSERT_NO_FATAL_FAILURE(KillAgentAfterStep3(kSeedFailsDomain, launcher, out + ".log", &killed));
 
   const auto code = launcher.WaitExit(seconds(300));
   ASSERT_TRUE(code.has_value()) << "the launcher did not stop";
@@ -306,7 +313,7 @@ TEST(LauncherTest, AFailedSeedDoesNotEndTheOthersAndTheAggregateNamesIt) {
   const std::string output = ReadFile(out + ".log");
   EXPECT_THAT(output, HasSubstr("seed 1 failed; going on with the next seeds"));
   EXPECT_THAT(output, HasSubstr("1 of 2 seeds failed (1;"));
-  EXPECT_TRUE(NoneLeft(children, groups));
+  EXPECT_TRUE(NoneLeft(killed.children, killed.groups));
   const auto s2 = nlohmann::json::parse(ReadFile(out + "/seed-2/summary.json"));
   EXPECT_EQ(s2.value("seed", -1), 2);
   EXPECT_EQ(s2.value("steps", -1), 400);
