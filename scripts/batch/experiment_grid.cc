@@ -19,6 +19,7 @@
 //
 //   mrslam_grid --scenario FILE --out DIR [--runs N] [--frames K] [--threads T]
 //               [--particles P] [--filters ekf,ekf_ela,fastslam] [--set k=v]... [--multi-process]
+// A run that fails is reported and left out and the others go on; the exit code is then 3.
 #include <unistd.h>
 
 #include <algorithm>
@@ -70,10 +71,10 @@ struct Job {
   int run = 1;
 };
 
-// Its metrics: averages over the robots, then per robot.
 // Exit code when the grid ran but some of its runs failed (grid.csv and tables.md hold the others).
 constexpr int kSomeRunsFailed = 3;
 
+// Its metrics: averages over the robots, then per robot.
 struct Row {
   double landmark_rmse_m = 0.0;
   double robot_rmse_m = 0.0;
