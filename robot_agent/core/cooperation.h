@@ -69,9 +69,9 @@ class Cooperation {
     common::Pose2 pose;
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
   };
-  // Everything known about one peer.
   static constexpr std::uint32_t kEncounterRefineSteps = 10;
 
+  // Everything known about one peer.
   struct PeerState {
     std::optional<TransformEstimate> transform;  // T(G_self <- G_peer)
     bool met = false;                            // from own mutual detections (else chained)
