@@ -126,22 +126,14 @@ void EkfSlam::Predict(const common::SensorStep& step) {
   q_u(0, 0) = odometry_.v_noise_sd_mps * odometry_.v_noise_sd_mps;
   q_u(1, 1) = odometry_.w_noise_sd_radps * odometry_.w_noise_sd_radps;
   auto segment = [&](double v, double w, double dt) {
-    // f(R) = (x + v dt cos h, y + v dt sin h, phi + w dt), h = phi + w dt:
-    //   F = I + [0 0 -v dt sin h; 0 0 v dt cos h; 0 0 0],
-    //   G = [dt cos h, -v dt^2 sin h; dt sin h, v dt^2 cos h; 0, dt].
-    const double h = x_(2) + w * dt, c = std::cos(h), s = std::sin(h);
-    Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
-    f(0, 2) = -v * dt * s;
-    f(1, 2) = v * dt * c;
-    Eigen::Matrix<double, 3, 2> g;
-    g << dt * c, -v * dt * dt * s, dt * s, v * dt * dt * c, 0.0, dt;
-    x_(0) += v * dt * c;
-    x_(1) += v * dt * s;
-    x_(2) = WrapAngle(h);
+    // The unicycle step f(R) with its Jacobians F (pose) and G (v, w).
+    const common::Pose2 robot = common::Pose2::FromVector(x_.head<3>());
+    const common::UnicycleJacobians j = common::UnicycleStepJacobians(robot, v, w, dt);
+    x_.head<3>() = common::UnicycleStep(robot, v, w, dt).Vector();
     const Eigen::Matrix3d p_rr = p_.topLeftCorner<3, 3>();
-    p_.topLeftCorner<3, 3>() = f * p_rr * f.transpose() + g * q_u * g.transpose();
+    p_.topLeftCorner<3, 3>() = j.f * p_rr * j.f.transpose() + j.g * q_u * j.g.transpose();
     if (n > 3) {
-      const Eigen::MatrixXd p_rm = f * p_.topRightCorner(3, n - 3);
+      const Eigen::MatrixXd p_rm = j.f * p_.topRightCorner(3, n - 3);
       p_.topRightCorner(3, n - 3) = p_rm;
       p_.bottomLeftCorner(n - 3, 3) = p_rm.transpose();
     }

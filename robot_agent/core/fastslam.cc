@@ -80,6 +80,8 @@ FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string&
       lidar_(options.sensors.lidar),
       imu_(options.sensors.imu),
       noise_(options.noise),
+      odometry_var_(options.sensors.odometry.v_noise_sd_mps * options.sensors.odometry.v_noise_sd_mps,
+                    options.sensors.odometry.w_noise_sd_radps * options.sensors.odometry.w_noise_sd_radps),
       step_dt_s_(options.run.dt_s),
       gates_(AssociationGates::FromOptions(options.filter)),
       fastslam2_(options.filter.proposal == common::Proposal::kMeasurement),
@@ -207,7 +209,7 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
   // From the IMU the particle's speed is v ~ N(v_p + dv, q) (q = imu_speed_var_), which moves
   // the pose along the direction of travel u by dt (v - v_p - dv): the pose prior gains dt^2 q u u^T.
   Pose2 mu = particle.pose;
-  Eigen::Matrix3d sigma = var.asDiagonal();
+  Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
   double v_prior = 0.0;
   Eigen::Vector2d u = Eigen::Vector2d::Zero(), prior_xy = Eigen::Vector2d::Zero();
   if (imu_step_) {
@@ -219,8 +221,14 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
     prior_xy = mu.Translation();
     sigma.topLeftCorner<2, 2>() += s.dt_s * s.dt_s * imu_speed_var_ * u * u.transpose();
   } else {
-    for (const auto& s : segments) mu = common::UnicycleStep(mu, s.v_mps, s.w_radps, s.dt_s);
+    // The odometry's (v, w) noise through each segment: Sigma = F Sigma F^T + G Q_u G^T.
+    for (const auto& s : segments) {
+      const common::UnicycleJacobians j = common::UnicycleStepJacobians(mu, s.v_mps, s.w_radps, s.dt_s);
+      sigma = j.f * sigma * j.f.transpose() + j.g * odometry_var_.asDiagonal() * j.g.transpose();
+      mu = common::UnicycleStep(mu, s.v_mps, s.w_radps, s.dt_s);
+    }
   }
+  sigma += var.asDiagonal();
   const double prior_along_var = u.dot(sigma.topLeftCorner<2, 2>() * u);
   if (!fastslam2_) {
     mu = Pose2::FromVector(mu.Vector() + rng_.Gaussian<3>(sigma));

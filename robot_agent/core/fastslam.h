@@ -24,7 +24,9 @@ namespace mrslam::robot_agent {
 //
 // One step (Process):
 //  1. Motion prior per particle: mu = UnicycleStep(pose, v, w, dt) from odometry (or the IMU),
-//     Sigma = Q = diag(noise.robot_process_var). From the IMU (w = gyro), each particle carries
+//     Sigma = G Q_u G^T + Q, Q = diag(noise.robot_process_var), Q_u = diag(sd_v^2, sd_w^2) the
+//     odometry's noise (sensors.odometry) through the step's Jacobian G = d mu / d(v, w) (F Sigma
+//     F^T + G Q_u G^T over several segments). From the IMU (w = gyro), each particle carries
 //     its own speed v_p, integrated from accel_x with its noise: the prior uses
 //     v ~ N(v_p + accel_x dt, q), which adds dt^2 q u u^T to Sigma along the direction of travel
 //     u; once the pose is sampled (step 4), v_p is sampled from its Gaussian given the pose.
@@ -161,6 +163,7 @@ class FastSlam : public SlamFilter {
   const common::LidarOptions lidar_;
   const common::ImuOptions imu_;
   const common::NoiseOptions noise_;
+  const Eigen::Vector2d odometry_var_;  // variances of the odometry's v and w
   const double step_dt_s_;
   const AssociationGates gates_;
   const bool fastslam2_;

@@ -177,5 +177,31 @@ TEST(Se2PropertyTest, UnicycleStepIsABodyFrameMotion) {
   }
 }
 
+TEST(Se2PropertyTest, UnicycleStepJacobiansMatchNumericDifferences) {
+  Rng rng(1, "se2/unicycle_jacobians");
+  constexpr double kStep = 1e-6, kJacobianTol = 1e-6;  // central differences, as above
+  for (int i = 0; i < kTrials; ++i) {
+    const Pose2 p = RandomPose(rng);
+    const double v = rng.Uniform(-2.0, 2.0), w = rng.Uniform(-3.0, 3.0), dt = rng.Uniform(0.01, 1.0);
+    const UnicycleJacobians j = UnicycleStepJacobians(p, v, w, dt);
+    // Difference of two steps as (dx, dy, wrapped dphi) over 2 kStep.
+    auto slope = [](const Pose2& plus, const Pose2& minus) -> Eigen::Vector3d {
+      return Eigen::Vector3d(plus.x - minus.x, plus.y - minus.y, WrapAngle(plus.heading - minus.heading)) / (2 * kStep);
+    };
+    Eigen::Matrix3d f;
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      d(k) = kStep;
+      f.col(k) = slope(UnicycleStep(Pose2{p.x + d.x(), p.y + d.y(), p.heading + d.z()}, v, w, dt),
+                       UnicycleStep(Pose2{p.x - d.x(), p.y - d.y(), p.heading - d.z()}, v, w, dt));
+    }
+    Eigen::Matrix<double, 3, 2> g;
+    g.col(0) = slope(UnicycleStep(p, v + kStep, w, dt), UnicycleStep(p, v - kStep, w, dt));
+    g.col(1) = slope(UnicycleStep(p, v, w + kStep, dt), UnicycleStep(p, v, w - kStep, dt));
+    ASSERT_LT((j.f - f).cwiseAbs().maxCoeff(), kJacobianTol) << j.f << "\nvs\n" << f;
+    ASSERT_LT((j.g - g).cwiseAbs().maxCoeff(), kJacobianTol) << j.g << "\nvs\n" << g;
+  }
+}
+
 }  // namespace
 }  // namespace mrslam::common
