@@ -28,7 +28,8 @@ common::LidarScan OneLandmark(bool with_nan_detection) {
 
 TEST(AgentRejectsTest, MalformedSamplesAreRejectedCountedAndTheAgentGoesOn) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string dir = testing::MakeTempDir("mrslam-rejects");
+  const testing::TempDir temp_dir("mrslam-rejects");
+  const std::string& dir = temp_dir.path();
   dds::Participant participant({kDomain, "fake_sim", false});
   FakeSimulator sim(participant, "r1", kSteps, kDt);
   ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot", "r1",

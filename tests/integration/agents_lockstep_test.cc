@@ -29,7 +29,8 @@ TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
   unsetenv("MRSLAM_DOMAIN");
   const std::string scenario_path = SourcePath("config/paper_two_robots.yaml");
   const auto scenario = common::LoadScenario(scenario_path, {});
-  const std::string dir = testing::MakeTempDir("mrslam-agents");
+  const testing::TempDir temp_dir("mrslam-agents");
+  const std::string& dir = temp_dir.path();
   const std::vector<std::string> common_args = {
       "--scenario", scenario_path, "--domain", std::to_string(kDomain), "--set", "filter.particles=200"};
 
@@ -76,7 +77,8 @@ TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
 }
 
 TEST(AgentsLockstepTest, UnknownRobotIdIsAOneLineError) {
-  const std::string dir = testing::MakeTempDir("mrslam-agent-bad");
+  const testing::TempDir temp_dir("mrslam-agent-bad");
+  const std::string& dir = temp_dir.path();
   ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot", "r9",
                       "--domain", std::to_string(kDomain + 1)},
                      dir + "/agent.log");

@@ -3,7 +3,10 @@
 #include <dirent.h>
 
 #include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 namespace mrslam::testing {
@@ -45,10 +48,23 @@ std::string ReadFile(const std::string& path) {
   return s.str();
 }
 
-std::string MakeTempDir(const std::string& prefix) {
+TempDir::TempDir(const std::string& prefix) {
   std::string templ = "/tmp/" + prefix + "-XXXXXX";
-  char* dir = mkdtemp(templ.data());
-  return dir != nullptr ? std::string(dir) : std::string();
+  if (mkdtemp(templ.data()) == nullptr) {
+    ADD_FAILURE() << "cannot create " << templ << ": " << std::strerror(errno);
+    return;
+  }
+  path_ = templ;
+}
+
+TempDir::~TempDir() {
+  if (path_.empty()) return;
+  if (::testing::Test::HasFailure()) {
+    std::cerr << "logs kept in " << path_ << "\n";
+    return;
+  }
+  std::error_code error;
+  std::filesystem::remove_all(path_, error);
 }
 
 std::map<pid_t, std::string> ChildrenOf(pid_t parent) {

@@ -111,8 +111,21 @@ inline void ExpectOneLineError(ChildProcess& process, const std::string& log_pat
   EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
 }
 
-// A fresh temporary directory for a test's logs and outputs.
-std::string MakeTempDir(const std::string& prefix);
+// A fresh temporary directory /tmp/<prefix>-XXXXXX for a test's logs and outputs. Declared before
+// the test's processes, it outlives them; it is removed with its contents when the test ends
+// without a failure, and kept (its path printed) for its logs when the test failed.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& prefix);
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
 
 // The children of a process (from /proc), with their command lines.
 std::map<pid_t, std::string> ChildrenOf(pid_t parent);

@@ -59,7 +59,8 @@ std::string RunGrid(const std::string& out, bool multi_process) {
 
 TEST(GridMultiProcessTest, ScoresTheSameAsInProcess) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string dir = testing::MakeTempDir("mrslam-grid");
+  const testing::TempDir temp_dir("mrslam-grid");
+  const std::string& dir = temp_dir.path();
   const auto in_process = RowsWithoutSeconds(RunGrid(dir + "/in", false));
   const auto multi_process = RowsWithoutSeconds(RunGrid(dir + "/mp", true));
   ASSERT_EQ(in_process.size(), 7u);  // header + 3 filters x 2 runs
@@ -69,14 +70,14 @@ TEST(GridMultiProcessTest, ScoresTheSameAsInProcess) {
   std::size_t logs = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir + "/mp/logs")) logs += entry.is_regular_file();
   EXPECT_EQ(logs, (in_process.size() - 1) * (1 + robots));
-  std::filesystem::remove_all(dir);
 }
 
 // A run whose agent dies is counted and left out; the grid goes on with the others, writes what
 // it has and exits 3 naming the run.
 TEST(GridMultiProcessTest, AFailedRunIsLeftOutAndTheOthersGoOn) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string dir = testing::MakeTempDir("mrslam-grid-fails");
+  const testing::TempDir temp_dir("mrslam-grid-fails");
+  const std::string& dir = temp_dir.path();
   // Long enough that the first run is still going when its agent is killed.
   ChildProcess grid(
       {BinPath("mrslam_grid"), "--scenario", SourcePath("config/dynamic_world.yaml"), "--out", dir, "--runs", "2",
@@ -99,7 +100,6 @@ TEST(GridMultiProcessTest, AFailedRunIsLeftOutAndTheOthersGoOn) {
   EXPECT_EQ(rows[1].rfind("ekf,0.5,0.5,2,", 0), 0u) << rows[1];
   EXPECT_NE(testing::ReadFile(dir + "/tables.md").find("1 of 2 runs failed and are left out of the means"),
             std::string::npos);
-  std::filesystem::remove_all(dir);
   std::filesystem::remove(dir + ".log");
 }
 

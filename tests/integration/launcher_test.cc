@@ -114,7 +114,8 @@ void ExpectFiniteAtLeast(const nlohmann::json& robot, const std::string& key, do
 
 TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string out = testing::MakeTempDir("mrslam-launch-short");
+  const testing::TempDir temp_dir("mrslam-launch-short");
+  const std::string& out = temp_dir.path();
   ChildProcess launcher(LaunchArgs(out, kSummaryDomain, {"--set", "run.steps=" + std::to_string(kShortSteps)}),
                         out + ".log");
   ASSERT_TRUE(launcher.started());
@@ -205,13 +206,13 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     EXPECT_GT(std::filesystem::file_size(path), 10000u) << path;
     EXPECT_THAT(output, HasSubstr(path));
   }
-  std::filesystem::remove_all(out);
   std::filesystem::remove(out + ".log");
 }
 
 TEST(LauncherTest, KilledAgentStopsTheRunNamingItAndLeavesNoProcess) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string out = testing::MakeTempDir("mrslam-launch-kill");
+  const testing::TempDir temp_dir("mrslam-launch-kill");
+  const std::string& out = temp_dir.path();
   // Long enough that the run is still going when the agent is killed right after step 3.
   ChildProcess launcher(LaunchArgs(out, kKillDomain, {"--set", "run.steps=2000", "--no-plots"}), out + ".log");
   KilledAgent killed;
@@ -226,13 +227,13 @@ TEST(LauncherTest, KilledAgentStopsTheRunNamingItAndLeavesNoProcess) {
   EXPECT_THAT(output, HasSubstr("signal 9"));
   EXPECT_THAT(output, HasSubstr(out + "/logs/robot_agent_r2.log"));
   EXPECT_TRUE(NoneLeft(killed.children, killed.groups));
-  std::filesystem::remove_all(out);
   std::filesystem::remove(out + ".log");
 }
 
 TEST(LauncherTest, SigintStopsEveryChildAndExits130) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string out = testing::MakeTempDir("mrslam-launch-sigint");
+  const testing::TempDir temp_dir("mrslam-launch-sigint");
+  const std::string& out = temp_dir.path();
   ChildProcess launcher(LaunchArgs(out, kSigintDomain, {"--set", "run.steps=2000", "--no-plots"}), out + ".log");
   ASSERT_TRUE(launcher.started());
   ASSERT_TRUE(WaitForEstimateStep(kSigintDomain, "r1", 3, launcher, seconds(120))) << ReadFile(out + ".log");
@@ -247,13 +248,13 @@ TEST(LauncherTest, SigintStopsEveryChildAndExits130) {
   ASSERT_TRUE(code.has_value()) << "the launcher did not stop";
   EXPECT_EQ(*code, 130) << ReadFile(out + ".log");
   EXPECT_TRUE(NoneLeft(children, groups));
-  std::filesystem::remove_all(out);
   std::filesystem::remove(out + ".log");
 }
 
 TEST(LauncherTest, BadScenarioExitsOneWithOneLineNamingTheKey) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string out = testing::MakeTempDir("mrslam-launch-bad");
+  const testing::TempDir temp_dir("mrslam-launch-bad");
+  const std::string& out = temp_dir.path();
   ChildProcess launcher(LaunchArgs(out, kBadInputDomain, {"--set", "sensors.lidar.range_noise_sd_m=-1"}), out + ".log");
   const auto code = launcher.WaitExit(seconds(30));
   ASSERT_TRUE(code.has_value());
@@ -263,13 +264,13 @@ TEST(LauncherTest, BadScenarioExitsOneWithOneLineNamingTheKey) {
   EXPECT_THAT(output, HasSubstr("sensors.lidar.range_noise_sd_m"));
   EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 1) << output;
   EXPECT_TRUE(ChildrenOf(launcher.pid()).empty());
-  std::filesystem::remove_all(out);
   std::filesystem::remove(out + ".log");
 }
 
 TEST(LauncherTest, SeedsRunInTurnAndAggregate) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string out = testing::MakeTempDir("mrslam-launch-seeds");
+  const testing::TempDir temp_dir("mrslam-launch-seeds");
+  const std::string& out = temp_dir.path();
   ChildProcess launcher(LaunchArgs(out, kSeedsDomain, {"--set", "run.steps=6", "--seeds", "3..4", "--no-plots"}),
                         out + ".log");
   ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + ".log");
@@ -294,13 +295,13 @@ TEST(LauncherTest, SeedsRunInTurnAndAggregate) {
     }
   }
   EXPECT_THAT(ReadFile(out + ".log"), HasSubstr("median"));
-  std::filesystem::remove_all(out);
   std::filesystem::remove(out + ".log");
 }
 
 TEST(LauncherTest, AFailedSeedDoesNotEndTheOthersAndTheAggregateNamesIt) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string out = testing::MakeTempDir("mrslam-launch-seed-fails");
+  const testing::TempDir temp_dir("mrslam-launch-seed-fails");
+  const std::string& out = temp_dir.path();
   // Long enough that seed 1 is still going when its agent is killed right after step 3.
   ChildProcess launcher(LaunchArgs(out, kSeedFailsDomain, {"--set", "run.steps=400", "--seeds", "1..2", "--no-plots"}),
                         out + ".log");
@@ -323,7 +324,6 @@ TEST(LauncherTest, AFailedSeedDoesNotEndTheOthersAndTheAggregateNamesIt) {
   EXPECT_EQ(aggregate["failed_seeds"], nlohmann::json({1}));
   EXPECT_EQ(aggregate["runs"], 1);
   EXPECT_TRUE(aggregate["robots"]["r1"]["position_rmse_m"]["median"].is_number());
-  std::filesystem::remove_all(out);
   std::filesystem::remove(out + ".log");
 }
 

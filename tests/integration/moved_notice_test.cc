@@ -56,7 +56,8 @@ int ConfirmedLandmarks(const msg::Estimate& e) {
 
 TEST(MovedNoticeTest, NoticeFromAPeerDropsThatLandmarkOnly) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string dir = testing::MakeTempDir("mrslam-moved");
+  const testing::TempDir temp_dir("mrslam-moved");
+  const std::string& dir = temp_dir.path();
   dds::Participant participant({kDomain, "fake_sim_and_r2", false});
   FakeSimulator sim(participant, "r1", kSteps, kDt);
   dds::Writer<msg::RelativeMeasurementPubSubType> to_r1_relative(participant, dds::PeerTopic("r1", "relative"));

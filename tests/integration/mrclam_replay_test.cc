@@ -38,7 +38,8 @@ TEST(MrclamReplayTest, ThreeAgentsTrackSixtySecondsOfDataset6) {
   const auto scenario = common::LoadScenario(scenario_path, overrides);
   ASSERT_EQ(scenario.robots.size(), 3u);
   ASSERT_EQ(scenario.run.steps, 600);
-  const std::string dir = testing::MakeTempDir("mrslam-mrclam");
+  const testing::TempDir temp_dir("mrslam-mrclam");
+  const std::string& dir = temp_dir.path();
   std::vector<std::string> common_args = {"--scenario", scenario_path, "--domain", std::to_string(kDomain)};
   for (const auto& o : overrides) common_args.insert(common_args.end(), {"--set", o});
 

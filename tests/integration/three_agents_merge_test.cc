@@ -41,7 +41,8 @@ TEST(ThreeAgentsMergeTest, RendezvousFireFramesChainAndPeerLandmarksEnterTheMap)
   unsetenv("MRSLAM_DOMAIN");
   const std::string scenario_path = SourcePath("tests/integration/data/three_robots.yaml");
   const auto scenario = common::LoadScenario(scenario_path, {});
-  const std::string dir = testing::MakeTempDir("mrslam-three");
+  const testing::TempDir temp_dir("mrslam-three");
+  const std::string& dir = temp_dir.path();
   const std::vector<std::string> args = {"--scenario", scenario_path, "--domain", std::to_string(kDomain)};
   testing::RunRecorder recorder(kDomain, scenario);
   recorder.Run(args, dir);

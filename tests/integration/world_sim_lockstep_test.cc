@@ -70,7 +70,8 @@ TEST(WorldSimLockstepTest, EveryTopicEveryStepOnceInOrderWithCoreValues) {
   unsetenv("MRSLAM_DOMAIN");
   const std::string scenario_path = SourcePath("config/paper_two_robots.yaml");
   auto scenario = common::LoadScenario(scenario_path, {"run.steps=" + std::to_string(kSteps)});
-  const std::string dir = testing::MakeTempDir("mrslam-lockstep");
+  const testing::TempDir temp_dir("mrslam-lockstep");
+  const std::string& dir = temp_dir.path();
 
   dds::Participant participant({kDomain, "lockstep_test", false});
   struct RobotReaders {
@@ -165,7 +166,8 @@ TEST(WorldSimLockstepTest, EveryTopicEveryStepOnceInOrderWithCoreValues) {
 
 TEST(WorldSimLockstepTest, SilentAgentMakesTheSimulatorExitNamingIt) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string dir = testing::MakeTempDir("mrslam-silent");
+  const testing::TempDir temp_dir("mrslam-silent");
+  const std::string& dir = temp_dir.path();
   ChildProcess sim({BinPath("world_sim"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--domain",
                     std::to_string(kDomain + 1), "--steps", "3", "--set", "run.ack_timeout_s=1", "--agents", "r2"},
                    dir + "/world_sim.log");
@@ -177,7 +179,8 @@ TEST(WorldSimLockstepTest, SilentAgentMakesTheSimulatorExitNamingIt) {
 
 TEST(WorldSimLockstepTest, BadScenarioExitsNonZeroWithOneLineReason) {
   unsetenv("MRSLAM_DOMAIN");
-  const std::string dir = testing::MakeTempDir("mrslam-bad");
+  const testing::TempDir temp_dir("mrslam-bad");
+  const std::string& dir = temp_dir.path();
   ChildProcess sim({BinPath("world_sim"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--set",
                     "sensors.lidar.range_noise_sd_m=-1"},
                    dir + "/world_sim.log");
