@@ -16,9 +16,12 @@
 //     the robot at some frame, the share that stands in its map at the end (MatchedTruth);
 //   static-only completeness: the same with the map's points assigned among the static true
 //     landmarks only, so that a mover passing a static landmark's map point cannot take it.
+// Besides the filters, ekf_oracle (in-process only) is the ekf given the static landmarks'
+// detections only: the grid drops the movers' detections by the simulator's truth before the
+// filter sees the scan, so it scores what perfect rejection of moving landmarks reaches.
 //
 //   mrslam_grid --scenario FILE --out DIR [--runs N] [--frames K] [--threads T]
-//               [--particles P] [--filters ekf,ekf_ela,fastslam] [--set k=v]... [--multi-process]
+//               [--particles P] [--filters ekf,ekf_ela,fastslam,ekf_oracle] [--set k=v]... [--multi-process]
 // A run that fails is reported and left out and the others go on; the exit code is then 3.
 #include <unistd.h>
 
@@ -34,6 +37,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -99,11 +103,16 @@ double Mean(const std::vector<double>& v) {
   return n > 0 ? s / n : std::nan("");
 }
 
-// A job's scenario: the base with the job's filter, cell, seed and frames.
+// The ekf fed the static landmarks' detections only (see the top of this file).
+constexpr const char* kOracle = "ekf_oracle";
+
+// A job's scenario: the base with the job's filter, cell, seed and frames. The oracle's world
+// labels its detections (the same draws: the labels cost none) so that the movers' can be dropped.
 common::ScenarioOptions JobOptions(common::ScenarioOptions options, const Job& job, int frames) {
   options.seed = static_cast<std::uint64_t>(job.run);
   options.run.steps = frames;
-  options.filter.type = job.filter;
+  options.filter.type = job.filter == kOracle ? "ekf" : job.filter;
+  if (job.filter == kOracle) options.sensors.lidar.report_identity = true;
   options.landmark_field.moving_fraction = kDynamism[job.dynamism_index];
   options.landmark_field.speed_mps = kSpeeds[job.speed_index];
   return options;
@@ -203,11 +212,28 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The oracle's scan: the detections of the landmarks not in movers, their labels removed unless
+// the scenario reports them.
+void DropMovers(const std::set<int>& movers, bool keep_labels, common::LidarScan* scan) {
+  std::vector<common::LandmarkDetection> kept;
+  for (common::LandmarkDetection d : scan->landmarks) {
+    if (movers.count(d.landmark_id) > 0) continue;
+    if (!keep_labels) d.landmark_id = -1;
+    kept.push_back(d);
+  }
+  scan->landmarks = std::move(kept);
+}
+
 // One job in-process: World + one filter per robot.
 Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
   const auto start = std::chrono::steady_clock::now();
   const common::ScenarioOptions options = JobOptions(base, job, frames);
   world_sim::World world(options);
+  const bool oracle = job.filter == kOracle;
+  std::set<int> movers;
+  for (const auto& l : world.Truth().landmarks) {
+    if (l.moving) movers.insert(std::stoi(l.id));
+  }
   std::vector<std::unique_ptr<robot_agent::SlamFilter>> filters;
   for (const auto& robot : options.robots) {
     filters.push_back(robot_agent::CreateFilter(options, robot.id, options.seed));
@@ -216,8 +242,9 @@ Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
   RunScorer scorer(options);
   std::vector<robot_agent::FilterEstimate> estimates(filters.size());
   for (int k = 0; k < frames; ++k) {
-    const std::vector<common::SensorStep> steps = world.Step();
+    std::vector<common::SensorStep> steps = world.Step();
     for (std::size_t i = 0; i < filters.size(); ++i) {
+      if (oracle) DropMovers(movers, base.sensors.lidar.report_identity, &steps[i].lidar);
       filters[i]->Process(steps[i]);
       estimates[i] = filters[i]->Estimate();
     }
@@ -495,7 +522,12 @@ int Main(int argc, char** argv) {
   options.filter.landmark_kinematics = common::LandmarkKinematics::kConstantTurnRate;
   const std::vector<std::string> filters = Split(filters_text);
   for (const auto& f : filters) {
-    if (f != "ekf" && f != "ekf_ela" && f != "fastslam") throw std::runtime_error("unknown filter '" + f + "'");
+    if (f != "ekf" && f != "ekf_ela" && f != "fastslam" && f != kOracle) {
+      throw std::runtime_error("unknown filter '" + f + "' (ekf, ekf_ela, fastslam or " + kOracle + ")");
+    }
+    if (f == kOracle && multi_process) {
+      throw std::runtime_error(std::string(kOracle) + " runs in-process only (the agents see no truth)");
+    }
   }
   std::filesystem::create_directories(out_dir);
   MultiProcessSetup setup{scenario_path, overrides, out_dir + "/logs"};

@@ -1,10 +1,12 @@
-// The experiment grid's --multi-process mode: the same jobs run as separate processes
-// (world_sim + one robot_agent per robot, over DDS, on a free domain the tool picks) score
-// exactly what the in-process run scores, and the processes leave nothing behind.
+// The experiment grid (mrslam_grid). Its --multi-process mode: the same jobs run as separate
+// processes (world_sim + one robot_agent per robot, over DDS, on a free domain the tool picks)
+// score exactly what the in-process run scores, and the processes leave nothing behind. Its
+// ekf_oracle: the ekf without the movers' detections.
 #include <gtest/gtest.h>
 #include <signal.h>
 
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -31,6 +33,15 @@ std::vector<std::string> RowsWithoutSeconds(const std::string& csv) {
     start = end + 1;
   }
   return rows;
+}
+
+// A CSV row's fields.
+std::vector<std::string> Fields(const std::string& row) {
+  std::vector<std::string> fields;
+  std::stringstream in(row);
+  std::string field;
+  while (std::getline(in, field, ',')) fields.push_back(field);
+  return fields;
 }
 
 std::string RunGrid(const std::string& out, bool multi_process) {
@@ -101,6 +112,38 @@ TEST(GridMultiProcessTest, AFailedRunIsLeftOutAndTheOthersGoOn) {
   EXPECT_NE(testing::ReadFile(dir + "/tables.md").find("1 of 2 runs failed and are left out of the means"),
             std::string::npos);
   std::filesystem::remove(dir + ".log");
+}
+
+// ekf_oracle is the ekf fed the static landmarks' detections only: without movers it scores
+// exactly what the ekf scores; among movers its map holds no stale copies of them. It runs
+// in-process only.
+TEST(GridTest, OracleIsTheEkfWithoutTheMoversDetections) {
+  const testing::TempDir temp_dir("mrslam-grid-oracle");
+  const std::string& dir = temp_dir.path();
+  ChildProcess grid(
+      {BinPath("mrslam_grid"), "--scenario", SourcePath("config/dynamic_world.yaml"), "--out", dir, "--runs", "2",
+       "--frames", "40", "--dynamism", "0", "0.5", "--speeds", "0.1", "--filters", "ekf,ekf_oracle"},
+      dir + "/grid.log");
+  ASSERT_EQ(grid.WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(dir + "/grid.log");
+  const auto rows = RowsWithoutSeconds(testing::ReadFile(dir + "/grid.csv"));
+  ASSERT_EQ(rows.size(), 9u);  // header + 2 cells x 2 runs x 2 filters, ekf then ekf_oracle per run
+  for (std::size_t r = 1; r < rows.size(); r += 2) {
+    std::vector<std::string> ekf = Fields(rows[r]), oracle = Fields(rows[r + 1]);
+    ASSERT_EQ(ekf[0], "ekf");
+    ASSERT_EQ(oracle[0], "ekf_oracle");
+    if (ekf[1] == "0") {
+      ekf.erase(ekf.begin());
+      oracle.erase(oracle.begin());
+      EXPECT_EQ(oracle, ekf);  // no movers: the same scans, the same filter
+    } else {
+      EXPECT_LT(std::stod(oracle[4]), 0.5 * std::stod(ekf[4])) << rows[r] << "\n" << rows[r + 1];  // landmark RMSE
+    }
+  }
+
+  ChildProcess multi({BinPath("mrslam_grid"), "--scenario", SourcePath("config/dynamic_world.yaml"), "--out",
+                      dir + "/mp", "--filters", "ekf_oracle", "--multi-process"},
+                     dir + "/mp.log");
+  testing::ExpectOneLineError(multi, dir + "/mp.log", "ekf_oracle runs in-process only");
 }
 
 }  // namespace
