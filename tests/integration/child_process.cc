@@ -93,10 +93,11 @@ std::map<pid_t, std::string> WaitForChildren(pid_t parent, std::size_t count, st
 }
 
 pid_t FindProcess(const std::map<pid_t, std::string>& processes, const std::vector<std::string>& parts) {
-  for (const auto& [pid, cmd] : processes) {
+  for (const auto& process : processes) {
+    const std::string& cmd = process.second;
     if (std::all_of(parts.begin(), parts.end(),
-                    [&](const std::string& p) { return cmd.find(p) != std::string::npos; })) {
-      return pid;
+                    [&cmd](const std::string& p) { return cmd.find(p) != std::string::npos; })) {
+      return process.first;
     }
   }
   return 0;

@@ -36,6 +36,7 @@ class ChildProcess {
     posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_adddup2(&actions, 1, 2);
     std::vector<char*> args;
+    args.reserve(argv.size() + 1);
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
     if (posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ) != 0) pid_ = -1;
@@ -96,7 +97,9 @@ inline std::vector<std::unique_ptr<ChildProcess>> StartAgents(const std::vector<
   for (const auto& id : robot_ids) {
     auto agent_args = args;
     agent_args.insert(agent_args.end(), {"--robot", id});
-    agents.push_back(StartBin("robot_agent", agent_args, dir + "/" + id + ".log"));
+    std::string log = dir;
+    log.append("/").append(id).append(".log");
+    agents.push_back(StartBin("robot_agent", agent_args, log));
   }
   return agents;
 }

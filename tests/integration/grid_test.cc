@@ -44,24 +44,17 @@ std::vector<std::string> Fields(const std::string& row) {
   return fields;
 }
 
+// mrslam_grid on paper B's world, writing to out, with more arguments.
+std::vector<std::string> GridArgs(const std::string& out, const std::vector<std::string>& more) {
+  std::vector<std::string> argv = {BinPath("mrslam_grid"), "--scenario", SourcePath("config/dynamic_world.yaml"),
+                                   "--out", out};
+  argv.insert(argv.end(), more.begin(), more.end());
+  return argv;
+}
+
 std::string RunGrid(const std::string& out, bool multi_process) {
-  std::vector<std::string> argv = {BinPath("mrslam_grid"),
-                                   "--scenario",
-                                   SourcePath("config/dynamic_world.yaml"),
-                                   "--out",
-                                   out,
-                                   "--runs",
-                                   "2",
-                                   "--frames",
-                                   "40",
-                                   "--dynamism",
-                                   "0.5",
-                                   "--speeds",
-                                   "0.5",
-                                   "--filters",
-                                   "ekf,ekf_ela,fastslam",
-                                   "--particles",
-                                   "50"};
+  std::vector<std::string> argv = GridArgs(out, {"--runs", "2", "--frames", "40", "--dynamism", "0.5", "--speeds",
+                                                 "0.5", "--filters", "ekf,ekf_ela,fastslam", "--particles", "50"});
   if (multi_process) argv.push_back("--multi-process");
   ChildProcess grid(argv, out + ".log");
   EXPECT_EQ(grid.WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(out + ".log");
@@ -90,10 +83,9 @@ TEST(GridMultiProcessTest, AFailedRunIsLeftOutAndTheOthersGoOn) {
   const testing::TempDir temp_dir("mrslam-grid-fails");
   const std::string& dir = temp_dir.path();
   // Long enough that the first run is still going when its agent is killed.
-  ChildProcess grid(
-      {BinPath("mrslam_grid"), "--scenario", SourcePath("config/dynamic_world.yaml"), "--out", dir, "--runs", "2",
-       "--frames", "400", "--dynamism", "0.5", "--speeds", "0.5", "--filters", "ekf", "--multi-process"},
-      dir + ".log");
+  ChildProcess grid(GridArgs(dir, {"--runs", "2", "--frames", "400", "--dynamism", "0.5", "--speeds", "0.5",
+                                   "--filters", "ekf", "--multi-process"}),
+                    dir + ".log");
   ASSERT_TRUE(grid.started());
   const auto children = testing::WaitForChildren(grid.pid(), 4, seconds(30));
   const pid_t victim = testing::FindProcess(children, {"robot_agent", "--robot r2", "--seed 1 "});
@@ -120,10 +112,9 @@ TEST(GridMultiProcessTest, AFailedRunIsLeftOutAndTheOthersGoOn) {
 TEST(GridTest, OracleIsTheEkfWithoutTheMoversDetections) {
   const testing::TempDir temp_dir("mrslam-grid-oracle");
   const std::string& dir = temp_dir.path();
-  ChildProcess grid(
-      {BinPath("mrslam_grid"), "--scenario", SourcePath("config/dynamic_world.yaml"), "--out", dir, "--runs", "2",
-       "--frames", "40", "--dynamism", "0", "0.5", "--speeds", "0.1", "--filters", "ekf,ekf_oracle"},
-      dir + "/grid.log");
+  ChildProcess grid(GridArgs(dir, {"--runs", "2", "--frames", "40", "--dynamism", "0", "0.5", "--speeds", "0.1",
+                                   "--filters", "ekf,ekf_oracle"}),
+                    dir + "/grid.log");
   ASSERT_EQ(grid.WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(dir + "/grid.log");
   const auto rows = RowsWithoutSeconds(testing::ReadFile(dir + "/grid.csv"));
   ASSERT_EQ(rows.size(), 9u);  // header + 2 cells x 2 runs x 2 filters, ekf then ekf_oracle per run
@@ -140,9 +131,7 @@ TEST(GridTest, OracleIsTheEkfWithoutTheMoversDetections) {
     }
   }
 
-  ChildProcess multi({BinPath("mrslam_grid"), "--scenario", SourcePath("config/dynamic_world.yaml"), "--out",
-                      dir + "/mp", "--filters", "ekf_oracle", "--multi-process"},
-                     dir + "/mp.log");
+  ChildProcess multi(GridArgs(dir + "/mp", {"--filters", "ekf_oracle", "--multi-process"}), dir + "/mp.log");
   testing::ExpectOneLineError(multi, dir + "/mp.log", "ekf_oracle runs in-process only");
 }
 
