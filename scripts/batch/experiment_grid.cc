@@ -267,7 +267,8 @@ Row RunJobMultiProcess(const common::ScenarioOptions& base, const MultiProcessSe
                        int frames) {
   const auto start = std::chrono::steady_clock::now();
   const common::ScenarioOptions options = JobOptions(base, job, frames);
-  const int domain = launch::PickFreeDomain(getpid());
+  const launch::DomainReservation held = launch::PickFreeDomain(getpid());  // until the run's processes are gone
+  const int domain = held.domain();
   if (domain < 0) throw std::runtime_error("no free DDS domain");
   dds::Participant participant({domain, "mrslam_grid", false});
   dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic);

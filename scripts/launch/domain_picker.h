@@ -17,8 +17,37 @@ int MetatrafficUnicastPort(int domain);
 // True when no process holds participant 0's metatraffic port of the domain (a bind test).
 bool DomainLooksFree(int domain);
 
+// A domain held for one run. While it lives no other pick on this host, in this process or
+// another, returns the same domain: the hold is an abstract Unix socket named
+// "mrslam-dds-domain-<d>", which the kernel releases with the object or with the process,
+// however it ends (nothing is left in the file system). The port test alone would let two
+// pickers take one domain in the time between a pick and its first participant.
+class DomainReservation {
+ public:
+  DomainReservation() = default;
+  ~DomainReservation();
+  DomainReservation(DomainReservation&& other) noexcept;
+  DomainReservation& operator=(DomainReservation&& other) noexcept;
+  DomainReservation(const DomainReservation&) = delete;
+  DomainReservation& operator=(const DomainReservation&) = delete;
+
+  // The domain; -1 when none was free.
+  int domain() const { return domain_; }
+
+  // Holds the domain if no one holds it yet.
+  static DomainReservation TryHold(int domain);
+
+ private:
+  DomainReservation(int domain, int fd) : domain_(domain), fd_(fd) {}
+  void Release();
+
+  int domain_ = -1;
+  int fd_ = -1;
+};
+
 // Tries the domains kFirstAutoDomain..kLastAutoDomain, starting at one derived from pid and
-// wrapping around, and returns the first that looks free; -1 if none.
-int PickFreeDomain(pid_t pid);
+// wrapping around, and holds the first that no other pick holds and that looks free; domain()
+// is -1 if none.
+DomainReservation PickFreeDomain(pid_t pid);
 
 }  // namespace mrslam::launch

@@ -352,7 +352,10 @@ int Main(const LaunchFlags& flags) {
   std::vector<json> summaries;
   std::vector<long long> finished, failed;
   for (const long long seed : seeds) {
-    const int domain = domain_given ? given_domain : PickFreeDomain(getpid());
+    // Held until this seed's processes are gone, so that no other run on the host takes it.
+    DomainReservation held;
+    if (!domain_given) held = PickFreeDomain(getpid());
+    const int domain = domain_given ? given_domain : held.domain();
     if (domain < 0) {
       throw std::runtime_error("no free DDS domain in " + std::to_string(kFirstAutoDomain) + ".." +
                                std::to_string(kLastAutoDomain) + " (give one with --domain)");
@@ -370,6 +373,9 @@ int Main(const LaunchFlags& flags) {
       continue;
     }
     if (code != kOk) return code;
+    for (const auto& warning : RejectionWarnings(summary, dir + "/logs")) {
+      std::cerr << kName << ": " << prefix << warning << "\n";
+    }
 
     std::vector<std::string> plots;
     if (!flags.no_plots) plots = RunPlots(dir, stop);

@@ -103,6 +103,19 @@ std::string SummaryTable(const json& summary) {
   return Render(header, rows, {true, false, false, false, false, false, false, true, true});
 }
 
+std::vector<std::string> RejectionWarnings(const json& summary, const std::string& log_dir) {
+  std::vector<std::string> out;
+  if (!summary.contains("robots") || !summary["robots"].is_object()) return out;
+  for (const auto& [id, r] : summary["robots"].items()) {
+    const json rejected = r.value("rejected_samples", json());
+    if (!rejected.is_number_unsigned() || rejected.get<std::uint64_t>() == 0) continue;
+    out.push_back("warning: " + id + "'s agent rejected " + rejected.dump() +
+                  " samples or peer messages (malformed, stale, or from another run on the same DDS domain); see " +
+                  log_dir + "/robot_agent_" + id + ".log");
+  }
+  return out;
+}
+
 json Aggregate(const std::vector<json>& summaries, const std::vector<long long>& seeds) {
   json out;
   out["scenario"] = summaries.empty() ? json() : summaries.front().value("scenario", json());

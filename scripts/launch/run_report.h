@@ -16,6 +16,11 @@ const std::vector<std::string>& AggregatedMetrics();
 // step and transform error). Missing or null values print as "-".
 std::string SummaryTable(const nlohmann::json& summary);
 
+// One warning per robot whose agent rejected samples or peer messages (summary.json's
+// rejected_samples: malformed, stale, or sent by another run on the same DDS domain, which
+// would also have fed it foreign data), naming its log in log_dir; empty when none did.
+std::vector<std::string> RejectionWarnings(const nlohmann::json& summary, const std::string& log_dir);
+
 // aggregate.json from the summaries of several seeds (same scenario):
 //   {"scenario", "seeds": [...], "runs": n,
 //    "robots": {"r1": {"position_rmse_m": {"median", "p90", "values": [...]}, ...}}}

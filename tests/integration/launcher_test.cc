@@ -30,6 +30,7 @@ using testing::FindProcess;
 using testing::GroupsOf;
 using ::testing::HasSubstr;
 using testing::NoneLeft;
+using ::testing::Not;
 using testing::ReadFile;
 using testing::SourcePath;
 using testing::WaitForChildren;
@@ -41,6 +42,7 @@ constexpr int kSigintDomain = 122;
 constexpr int kBadInputDomain = 123;
 constexpr int kSeedsDomain = 124;
 constexpr int kSeedFailsDomain = 125;
+constexpr int kForeignDomain = 126;
 
 constexpr int kShortSteps = 12;
 
@@ -146,6 +148,8 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     EXPECT_LT(r["position_rmse_m"].get<double>(), 20.0) << id;  // 12 steps of 0.65 m: a sanity bound
     EXPECT_LT(r["heading_rmse_deg"].get<double>(), 180.0) << id;
     ASSERT_TRUE(r.contains("frames_known") && r["frames_known"].is_array()) << id;
+    ASSERT_TRUE(r.contains("rejected_samples") && r["rejected_samples"].is_number_unsigned()) << id;
+    EXPECT_EQ(r["rejected_samples"].get<unsigned>(), 0U) << id;
     ASSERT_TRUE(r.contains("rendezvous") && r["rendezvous"].is_array()) << id;
     for (const auto& event : r["rendezvous"]) {
       EXPECT_TRUE(event.contains("peer") && event.contains("step") && event.contains("transform_error_m") &&
@@ -325,6 +329,35 @@ TEST(LauncherTest, AFailedSeedDoesNotEndTheOthersAndTheAggregateNamesIt) {
   EXPECT_EQ(aggregate["runs"], 1);
   EXPECT_TRUE(aggregate["robots"]["r1"]["position_rmse_m"]["median"].is_number());
   std::filesystem::remove(out + ".log");
+}
+
+// A sample that does not belong to the run (here a scan for r1 stamped with a step already
+// processed, as another run on the same domain would send) is rejected by the agent, counted in
+// summary.json and named in a warning once the run is over.
+TEST(LauncherTest, AForeignSampleIsCountedAndWarnedAbout) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-launch-foreign");
+  const std::string& out = temp_dir.path();
+  ChildProcess launcher(LaunchArgs(out, kForeignDomain, {"--set", "run.steps=60", "--no-plots"}), out + "/launch.log");
+  ASSERT_TRUE(launcher.started());
+  {
+    dds::Participant participant({kForeignDomain, "foreign_run", false});
+    dds::Writer<msg::LidarScanPubSubType> writer(participant, dds::LidarTopic("r1"));
+    ASSERT_TRUE(WaitForEstimateStep(kForeignDomain, "r1", 3, launcher, seconds(120))) << ReadFile(out + "/launch.log");
+    msg::LidarScan scan;
+    scan.stamp().robot_id("r1");
+    scan.stamp().step(1);
+    ASSERT_TRUE(writer.Write(scan));
+    EXPECT_TRUE(writer.WaitForAcknowledgments(milliseconds(5000)));
+  }
+  ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + "/launch.log");
+  const std::string output = ReadFile(out + "/launch.log");
+  EXPECT_THAT(output, HasSubstr("warning: r1's agent rejected 1 samples or peer messages"));
+  EXPECT_THAT(output, HasSubstr(out + "/logs/robot_agent_r1.log"));
+  EXPECT_THAT(output, Not(HasSubstr("warning: r2's agent")));
+  const auto summary = nlohmann::json::parse(ReadFile(out + "/summary.json"));
+  EXPECT_EQ(summary["robots"]["r1"]["rejected_samples"].get<unsigned>(), 1U);
+  EXPECT_EQ(summary["robots"]["r2"]["rejected_samples"].get<unsigned>(), 0U);
 }
 
 }  // namespace

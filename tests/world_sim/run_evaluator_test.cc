@@ -46,6 +46,7 @@ class RunEvaluatorTest : public ::testing::Test {
       r1.landmarks = {{Eigen::Vector2d(1.0, 0.0), 1}};
       r2.landmarks = {{Eigen::Vector2d(1.0, 0.0), 2}};  // in r2's own frame
       r1.frames_known = r1_frames_known;
+      r1.rejected_samples = 2 * step;  // the agent's running count
       evaluator.AddEstimate("r1", r1);
       evaluator.AddEstimate("r2", r2);
       if (step > 0) {  // standing still
@@ -73,6 +74,12 @@ TEST_F(RunEvaluatorTest, UnionCompletenessCountsTheLandmarksOfTheFramesKnown) {
   EXPECT_DOUBLE_EQ(knowing["robots"]["r1"]["map_completeness"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(knowing["robots"]["r1"]["union_completeness"].get<double>(), 0.5);
   EXPECT_DOUBLE_EQ(knowing["robots"]["r2"]["union_completeness"].get<double>(), 1.0);
+}
+
+TEST_F(RunEvaluatorTest, RejectedSamplesAreTheAgentsCountAtTheEnd) {
+  const nlohmann::json summary = Score({});
+  EXPECT_EQ(summary["robots"]["r1"]["rejected_samples"].get<unsigned>(), 2U);
+  EXPECT_EQ(summary["robots"]["r2"]["rejected_samples"].get<unsigned>(), 0U);
 }
 
 }  // namespace

@@ -28,6 +28,7 @@ RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
     e.landmarks.push_back({Eigen::Vector2d(l.pose().x_m(), l.pose().y_m()), l.landmark_id()});
   }
   e.frames_known = m.frames_known();
+  e.rejected_samples = m.rejected_samples();
   for (const auto& r : m.rendezvous()) e.rendezvous.push_back({r.peer_id(), r.step(), dds::FromMsg(r.t_self_peer())});
   return e;
 }

@@ -224,6 +224,7 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
         union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
     r["steps_scored"] = pos_err.size();
     r["frames_known"] = last != nullptr ? last->frames_known : std::vector<std::string>{};
+    r["rejected_samples"] = last != nullptr ? last->rejected_samples : 0U;
     // A rendezvous is scored by the transform the robot holds at the end of the encounter:
     // the last report of that peer within 10 steps of the first.
     nlohmann::json rendezvous = nlohmann::json::array();

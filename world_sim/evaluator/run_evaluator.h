@@ -31,6 +31,8 @@ struct RobotEstimate {
   std::vector<MapPoint> landmarks;  // in the robot's own frame
   std::vector<std::string> frames_known;
   std::vector<RendezvousRecord> rendezvous;
+  // Samples and peer messages the agent has rejected so far (malformed, stale, not for it).
+  std::uint32_t rejected_samples = 0;
 };
 
 // Scores a run: collects the truth and every robot's estimates and odometry by step, then
