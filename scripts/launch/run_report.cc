@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <utility>
 
 #include "world_sim/evaluator/metrics.h"
 
@@ -109,9 +110,16 @@ std::vector<std::string> RejectionWarnings(const json& summary, const std::strin
   for (const auto& [id, r] : summary["robots"].items()) {
     const json rejected = r.value("rejected_samples", json());
     if (!rejected.is_number_unsigned() || rejected.get<std::uint64_t>() == 0) continue;
-    out.push_back("warning: " + id + "'s agent rejected " + rejected.dump() +
-                  " samples or peer messages (malformed, stale, or from another run on the same DDS domain); see " +
-                  log_dir + "/robot_agent_" + id + ".log");
+    std::string line = "warning: ";
+    line.append(id)
+        .append("'s agent rejected ")
+        .append(rejected.dump())
+        .append(" samples or peer messages (malformed, stale, or from another run on the same DDS domain); see ")
+        .append(log_dir)
+        .append("/robot_agent_")
+        .append(id)
+        .append(".log");
+    out.push_back(std::move(line));
   }
   return out;
 }
