@@ -237,8 +237,9 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   for (const auto& robot : scenario.robots) {
     const std::string name = "robot_agent_" + robot.id;
     // The evaluator (and the progress monitor) must read every estimate: wait for them.
-    children.Start(name, command("robot_agent", {"--robot", robot.id, "--wait-readers", monitor ? "2" : "1"}),
-                   dir + "/logs/" + name + ".log");
+    std::string log = dir;
+    log.append("/logs/").append(name).append(".log");
+    children.Start(name, command("robot_agent", {"--robot", robot.id, "--wait-readers", monitor ? "2" : "1"}), log);
   }
   children.Start("world_sim", command("world_sim", {"--wait-readers", "1"}), dir + "/logs/world_sim.log");
 
