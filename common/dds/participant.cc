@@ -81,9 +81,9 @@ Participant::~Participant() {
   fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
 }
 
-fdds::Topic* Participant::GetTopic(const std::string& name, fdds::TypeSupport type) {
+fdds::Topic* Participant::GetTopic(const std::string& name, const fdds::TypeSupport& type) {
   if (auto it = topics_.find(name); it != topics_.end()) return it->second;
-  const std::string type_name = type.get_type_name();
+  const std::string& type_name = type.get_type_name();
   if (participant_->find_type(type_name).empty()) {
     if (type.register_type(participant_) != ReturnCode_t::RETCODE_OK) {
       throw DdsError("cannot register DDS type '" + type_name + "'");

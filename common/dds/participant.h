@@ -59,7 +59,7 @@ class Participant {
   eprosima::fastdds::dds::Subscriber* subscriber() { return subscriber_; }
 
   // Registers PubSubType once per type name and returns the topic (created once per name).
-  eprosima::fastdds::dds::Topic* GetTopic(const std::string& name, eprosima::fastdds::dds::TypeSupport type);
+  eprosima::fastdds::dds::Topic* GetTopic(const std::string& name, const eprosima::fastdds::dds::TypeSupport& type);
 
  private:
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;

@@ -62,6 +62,7 @@ pid_t ProcessSupervisor::Start(const std::string& name, const std::vector<std::s
   const int null_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
   // Everything the child needs is prepared before fork: after it only system calls are safe.
   std::vector<char*> args;
+  args.reserve(argv.size() + 1);
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   const pid_t parent = getpid();

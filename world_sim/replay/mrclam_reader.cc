@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <string>
+#include <utility>
 
 #include "common/angles.h"
 
@@ -68,7 +70,9 @@ MrclamTable ReadMrclamTable(const std::string& path, std::size_t columns) {
     if (ParseRow(line, columns, &row, &reason)) {
       table.rows.push_back(row);
     } else {
-      table.problems.push_back(path + ":" + std::to_string(number) + ": " + reason);
+      std::string problem = path;
+      problem.append(":").append(std::to_string(number)).append(": ").append(reason);
+      table.problems.push_back(std::move(problem));
     }
   }
   return table;
