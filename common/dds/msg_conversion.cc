@@ -23,7 +23,7 @@ common::Pose2 FromMsg(const msg::Pose2D& p) { return {p.x_m(), p.y_m(), p.headin
 std::array<double, 9> CovarianceToMsg(const Eigen::Matrix3d& m) {
   std::array<double, 9> a{};
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) a[static_cast<std::size_t>(3 * r + c)] = m(r, c);
+    for (int c = 0; c < 3; ++c) a[3 * static_cast<std::size_t>(r) + static_cast<std::size_t>(c)] = m(r, c);
   }
   return a;
 }
@@ -31,7 +31,7 @@ std::array<double, 9> CovarianceToMsg(const Eigen::Matrix3d& m) {
 Eigen::Matrix3d CovarianceFromMsg(const std::array<double, 9>& a) {
   Eigen::Matrix3d m;
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) m(r, c) = a[static_cast<std::size_t>(3 * r + c)];
+    for (int c = 0; c < 3; ++c) m(r, c) = a[3 * static_cast<std::size_t>(r) + static_cast<std::size_t>(c)];
   }
   return m;
 }

@@ -50,10 +50,10 @@ ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std:
   // The squared Mahalanobis distance of delta for observation i predicted from the pose (if
   // with_pose) and from the landmarks in others.
   auto statistic = [&](int i, const std::vector<int>& others, bool with_pose) -> double {
-    const int terms = (with_pose ? 1 : 0) + static_cast<int>(others.size());
+    const Eigen::Index terms = (with_pose ? 1 : 0) + static_cast<Eigen::Index>(others.size());
     Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(2 * terms, dim);
     Eigen::VectorXd d(2 * terms);
-    int t = 0;
+    Eigen::Index t = 0;
     if (with_pose) {
       // d_i0 = l_i - m_i.
       d.head<2>() = sightings[i].l - map_mean(i);
@@ -76,7 +76,7 @@ ElaResult ElaTest(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const std:
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(c);
     if (ldlt.info() != Eigen::Success) return 0.0;
     Eigen::MatrixXd a(2 * terms, 2);
-    for (int u = 0; u < terms; ++u) a.block<2, 2>(2 * u, 0).setIdentity();
+    for (Eigen::Index u = 0; u < terms; ++u) a.block<2, 2>(2 * u, 0).setIdentity();
     const Eigen::MatrixXd c_inv_a = ldlt.solve(a);
     const Eigen::Matrix2d lambda = a.transpose() * c_inv_a;  // information of delta
     const Eigen::Vector2d rhs = c_inv_a.transpose() * d;     // A^T C^-1 D
