@@ -79,22 +79,25 @@ inline Pose2 UnicycleStep(const Pose2& p, double v_mps, double w_radps, double d
   return {p.x + v_mps * dt_s * std::cos(h), p.y + v_mps * dt_s * std::sin(h), WrapAngle(h)};
 }
 
-// Jacobians of UnicycleStep, with h = phi + w dt: F = d next / d(x, y, phi) and G = d next / d(v, w):
+// UnicycleStep with its Jacobians, from one cos/sin of h = phi + w dt:
+// F = d next / d(x, y, phi) and G = d next / d(v, w):
 //   F = I + [0 0 -v dt sin h; 0 0 v dt cos h; 0 0 0],
 //   G = [dt cos h, -v dt^2 sin h; dt sin h, v dt^2 cos h; 0, dt].
 // A step from a pose of covariance P with (v, w) of covariance Q_u has covariance F P F^T + G Q_u G^T.
-struct UnicycleJacobians {
+struct LinearizedUnicycleStep {
+  Pose2 next;  // UnicycleStep(p, v, w, dt)
   Eigen::Matrix3d f;
   Eigen::Matrix<double, 3, 2> g;
 };
-inline UnicycleJacobians UnicycleStepJacobians(const Pose2& p, double v_mps, double w_radps, double dt_s) {
+inline LinearizedUnicycleStep UnicycleStepWithJacobians(const Pose2& p, double v_mps, double w_radps, double dt_s) {
   const double h = p.heading + w_radps * dt_s, c = std::cos(h), s = std::sin(h);
-  UnicycleJacobians j;
-  j.f = Eigen::Matrix3d::Identity();
-  j.f(0, 2) = -v_mps * dt_s * s;
-  j.f(1, 2) = v_mps * dt_s * c;
-  j.g << dt_s * c, -v_mps * dt_s * dt_s * s, dt_s * s, v_mps * dt_s * dt_s * c, 0.0, dt_s;
-  return j;
+  LinearizedUnicycleStep step;
+  step.next = {p.x + v_mps * dt_s * c, p.y + v_mps * dt_s * s, WrapAngle(h)};
+  step.f = Eigen::Matrix3d::Identity();
+  step.f(0, 2) = -v_mps * dt_s * s;
+  step.f(1, 2) = v_mps * dt_s * c;
+  step.g << dt_s * c, -v_mps * dt_s * dt_s * s, dt_s * s, v_mps * dt_s * dt_s * c, 0.0, dt_s;
+  return step;
 }
 
 }  // namespace mrslam::common

@@ -127,9 +127,9 @@ void EkfSlam::Predict(const common::SensorStep& step) {
   q_u(1, 1) = odometry_.w_noise_sd_radps * odometry_.w_noise_sd_radps;
   auto segment = [&](double v, double w, double dt) {
     // The unicycle step f(R) with its Jacobians F (pose) and G (v, w).
-    const common::Pose2 robot = common::Pose2::FromVector(x_.head<3>());
-    const common::UnicycleJacobians j = common::UnicycleStepJacobians(robot, v, w, dt);
-    x_.head<3>() = common::UnicycleStep(robot, v, w, dt).Vector();
+    const common::LinearizedUnicycleStep j =
+        common::UnicycleStepWithJacobians(common::Pose2::FromVector(x_.head<3>()), v, w, dt);
+    x_.head<3>() = j.next.Vector();
     const Eigen::Matrix3d p_rr = p_.topLeftCorner<3, 3>();
     p_.topLeftCorner<3, 3>() = j.f * p_rr * j.f.transpose() + j.g * q_u * j.g.transpose();
     if (n > 3) {

@@ -223,9 +223,9 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
   } else {
     // The odometry's (v, w) noise through each segment: Sigma = F Sigma F^T + G Q_u G^T.
     for (const auto& s : segments) {
-      const common::UnicycleJacobians j = common::UnicycleStepJacobians(mu, s.v_mps, s.w_radps, s.dt_s);
+      const common::LinearizedUnicycleStep j = common::UnicycleStepWithJacobians(mu, s.v_mps, s.w_radps, s.dt_s);
       sigma = j.f * sigma * j.f.transpose() + j.g * odometry_var_.asDiagonal() * j.g.transpose();
-      mu = common::UnicycleStep(mu, s.v_mps, s.w_radps, s.dt_s);
+      mu = j.next;
     }
   }
   sigma += var.asDiagonal();

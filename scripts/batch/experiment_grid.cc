@@ -230,9 +230,11 @@ Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
   const common::ScenarioOptions options = JobOptions(base, job, frames);
   world_sim::World world(options);
   const bool oracle = job.filter == kOracle;
-  std::set<int> movers;
-  for (const auto& l : world.Truth().landmarks) {
-    if (l.moving) movers.insert(std::stoi(l.id));
+  std::set<int> movers;  // the oracle's: the landmarks whose detections it drops
+  if (oracle) {
+    for (const auto& l : world.Truth().landmarks) {
+      if (l.moving) movers.insert(std::stoi(l.id));
+    }
   }
   std::vector<std::unique_ptr<robot_agent::SlamFilter>> filters;
   for (const auto& robot : options.robots) {

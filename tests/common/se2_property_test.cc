@@ -177,13 +177,17 @@ TEST(Se2PropertyTest, UnicycleStepIsABodyFrameMotion) {
   }
 }
 
-TEST(Se2PropertyTest, UnicycleStepJacobiansMatchNumericDifferences) {
+TEST(Se2PropertyTest, UnicycleStepWithJacobiansMatchesTheStepAndNumericDifferences) {
   Rng rng(1, "se2/unicycle_jacobians");
   constexpr double kStep = 1e-6, kJacobianTol = 1e-6;  // central differences, as above
   for (int i = 0; i < kTrials; ++i) {
     const Pose2 p = RandomPose(rng);
     const double v = rng.Uniform(-2.0, 2.0), w = rng.Uniform(-3.0, 3.0), dt = rng.Uniform(0.01, 1.0);
-    const UnicycleJacobians j = UnicycleStepJacobians(p, v, w, dt);
+    const LinearizedUnicycleStep j = UnicycleStepWithJacobians(p, v, w, dt);
+    const Pose2 next = UnicycleStep(p, v, w, dt);  // the same expressions: equal to the bit
+    ASSERT_EQ(j.next.x, next.x);
+    ASSERT_EQ(j.next.y, next.y);
+    ASSERT_EQ(j.next.heading, next.heading);
     // Difference of two steps as (dx, dy, wrapped dphi) over 2 kStep.
     auto slope = [](const Pose2& plus, const Pose2& minus) -> Eigen::Vector3d {
       return Eigen::Vector3d(plus.x - minus.x, plus.y - minus.y, WrapAngle(plus.heading - minus.heading)) / (2 * kStep);
