@@ -11,17 +11,21 @@
 // own filter, on the same data (the lidar reports identities; nothing else changes). With
 // --transform-reference it prints instead, per ordered pair of robots, the error of the transform
 // T(G_i <- G_j) at the end of their first encounter (DESIGN.md) as the joint MAP reference of
-// both robots holds it: the best that "everything both robots know" allows.
+// both robots holds it: the best that "everything both robots know" allows (with a
+// landmark_field, from its static landmarks: the movers' readings are left out). The JSON also
+// holds each met pair's transform per seed.
 //
 //   mrslam_batch --scenario FILE --seeds A..B [--set k=v]... [--particles N] [--threads T]
 //                [--reference | --transform-reference] [--json FILE]
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -39,6 +43,7 @@
 #include "robot_agent/core/map_reference.h"
 #include "robot_agent/core/slam_filter.h"
 #include "world_sim/core/step_source.h"
+#include "world_sim/core/world.h"
 #include "world_sim/evaluator/metrics.h"
 
 namespace mrslam {
@@ -194,7 +199,30 @@ TransformError ErrorOf(const common::Pose2& held, const common::Pose2& truth) {
 // NaN if they never meet.
 struct PairErrors {
   TransformError joint_ij, joint_ji, own_ij, own_ji;
+  common::Pose2 joint_t_ij;  // the joint reference's T(G_i <- G_j) (when they met)
 };
+
+// The joint MAP reference of the robots (scenario indices; the first at its known first pose,
+// the others started from the guesses). With a landmark_field it knows the field's static
+// landmarks only and leaves the readings of its movers out: they shuttle back and forth, a
+// motion the reference does not model.
+std::unique_ptr<robot_agent::MapReference> MakeReference(const common::ScenarioOptions& options,
+                                                         const std::vector<int>& robots,
+                                                         const std::vector<common::Pose2>& guesses, int from_step) {
+  using robot_agent::MapReference;
+  if (!options.landmark_field.enabled) return std::make_unique<MapReference>(options, robots, guesses, from_step);
+  std::vector<MapReference::RobotStart> starts;
+  for (std::size_t r = 0; r < robots.size(); ++r) {
+    const common::RobotOptions& robot = options.robots.at(static_cast<std::size_t>(robots[r]));
+    starts.push_back({robot.id, r == 0 ? robot_agent::InitialPoseInOwnFrame(robot) : guesses.at(r - 1)});
+  }
+  std::map<int, MapReference::Kinematics> statics;
+  for (const auto& l : world_sim::ExpandLandmarks(options)) {
+    if (l.motion.model == common::LandmarkMotionModel::kStatic) statics[l.id] = MapReference::Kinematics{};
+  }
+  return std::make_unique<MapReference>(options, starts, std::move(statics), from_step);
+}
+
 PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed, int i, int j) {
   options.seed = seed;
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
@@ -203,8 +231,9 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
   // T(G_i <- G_j) maps j's first pose in G_j to its first pose in G_i.
   const common::Pose2 start_j = robot_agent::InitialPoseInOwnFrame(options.robots[j]);
   const common::Pose2 guess = common::Compose(common::Compose(true_ij, start_j), {0.3, 0.3, common::kPi / 36});
-  robot_agent::MapReference joint(options, {i, j}, {guess}, options.rendezvous.enable_from_step);
-  robot_agent::MapReference own_i(options, i), own_j(options, j);
+  const auto joint_ref = MakeReference(options, {i, j}, {guess}, options.rendezvous.enable_from_step);
+  const auto own_i_ref = MakeReference(options, {i}, {}, 0), own_j_ref = MakeReference(options, {j}, {}, 0);
+  robot_agent::MapReference &joint = *joint_ref, &own_i = *own_i_ref, &own_j = *own_j_ref;
   const std::string& id_i = options.robots[i].id;
   const std::string& id_j = options.robots[j].id;
   auto sees = [](const common::SensorStep& step, const std::string& id) {
@@ -235,7 +264,7 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
     if (!in_run || k == options.run.steps) {
       const common::Pose2 true_ji = common::Inverse(true_ij);
       out = {ErrorOf(held_joint, true_ij), ErrorOf(common::Inverse(held_joint), true_ji), ErrorOf(held_own, true_ij),
-             ErrorOf(common::Inverse(held_own), true_ji)};
+             ErrorOf(common::Inverse(held_own), true_ji), held_joint};
       break;
     }
   }
@@ -414,10 +443,16 @@ int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_
       const std::string& a = options.robots[forward ? pairs[p].first : pairs[p].second].id;
       const std::string& b = options.robots[forward ? pairs[p].second : pairs[p].first].id;
       std::vector<double> joint_m, joint_deg, own_m, own_deg;
-      for (const auto& r : results) {
+      std::vector<std::uint64_t> met_seeds;
+      std::vector<std::array<double, 3>> joint_t;  // T(G_a <- G_b) per seed met
+      for (std::size_t s = 0; s < results.size(); ++s) {
+        const auto& r = results[s];
         const TransformError& joint = forward ? r[p].joint_ij : r[p].joint_ji;
         const TransformError& own = forward ? r[p].own_ij : r[p].own_ji;
         if (std::isnan(joint.m)) continue;
+        met_seeds.push_back(first_seed + s);
+        const common::Pose2 t = forward ? r[p].joint_t_ij : common::Inverse(r[p].joint_t_ij);
+        joint_t.push_back({t.x, t.y, t.heading});
         joint_m.push_back(joint.m);
         joint_deg.push_back(joint.deg);
         own_m.push_back(own.m);
@@ -434,10 +469,8 @@ int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_
                   evaluator::Percentile(joint_m, 90.0), evaluator::Percentile(joint_deg, 90.0),
                   evaluator::Median(own_m), evaluator::Median(own_deg), evaluator::Percentile(own_m, 90.0),
                   evaluator::Percentile(own_deg, 90.0));
-      json["pairs"][name] = {{"joint_error_m", joint_m},
-                             {"joint_error_deg", joint_deg},
-                             {"own_error_m", own_m},
-                             {"own_error_deg", own_deg}};
+      json["pairs"][name] = {{"seeds", met_seeds},           {"joint_transform", joint_t}, {"joint_error_m", joint_m},
+                             {"joint_error_deg", joint_deg}, {"own_error_m", own_m},       {"own_error_deg", own_deg}};
     }
   }
   WriteJson(json, json_path);

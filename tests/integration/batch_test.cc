@@ -1,0 +1,60 @@
+// mrslam_batch --transform-reference on a scenario whose landmarks come from a landmark_field
+// (swarm_8): the joint MAP reference knows the field's static landmarks, and the JSON holds each
+// met pair's transform per seed, the one its error is measured of.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/angles.h"
+#include "common/config/scenario_options.h"
+#include "common/se2.h"
+#include "tests/integration/child_process.h"
+
+namespace mrslam {
+namespace {
+
+using std::chrono::seconds;
+using testing::BinPath;
+using testing::ChildProcess;
+using testing::SourcePath;
+
+TEST(BatchTransformReferenceTest, PlacesAMetPairOnALandmarkField) {
+  const testing::TempDir temp_dir("mrslam-batch");
+  const std::string json_path = temp_dir.path() + "/reference.json";
+  const std::string log = temp_dir.path() + "/batch.log";
+  // Seed 1's r1 and r2 meet at step 4.
+  ChildProcess batch({BinPath("mrslam_batch"), "--scenario", SourcePath("config/swarm_8.yaml"), "--seeds", "1..1",
+                      "--set", "run.steps=20", "--transform-reference", "--json", json_path},
+                     log);
+  ASSERT_EQ(batch.WaitExit(seconds(300)), std::optional<int>(0)) << testing::ReadFile(log);
+
+  const auto json = nlohmann::json::parse(testing::ReadFile(json_path));
+  const auto& pair = json.at("pairs").at("r1<-r2");
+  ASSERT_EQ(pair.at("seeds").get<std::vector<std::uint64_t>>(), std::vector<std::uint64_t>{1});
+  const auto t = pair.at("joint_transform").at(0).get<std::array<double, 3>>();
+  const auto scenario = common::LoadScenario(SourcePath("config/swarm_8.yaml"), {});
+  const common::Pose2 truth = common::Between(scenario.robots[0].frame_in_world, scenario.robots[1].frame_in_world);
+  const double error_m = std::hypot(t[0] - truth.x, t[1] - truth.y);
+  const double error_deg = common::DegFromRad(std::abs(common::WrapAngle(t[2] - truth.heading)));
+  EXPECT_LT(error_m, 0.2);
+  EXPECT_LT(error_deg, 2.0);
+  EXPECT_NEAR(pair.at("joint_error_m").at(0).get<double>(), error_m, 1e-9);
+  EXPECT_NEAR(pair.at("joint_error_deg").at(0).get<double>(), error_deg, 1e-9);
+  // The reverse pair holds the inverse transform.
+  const auto back = json.at("pairs").at("r2<-r1").at("joint_transform").at(0).get<std::array<double, 3>>();
+  const common::Pose2 composed = common::Compose({t[0], t[1], t[2]}, {back[0], back[1], back[2]});
+  EXPECT_NEAR(composed.x, 0.0, 1e-9);
+  EXPECT_NEAR(composed.y, 0.0, 1e-9);
+  EXPECT_NEAR(common::WrapAngle(composed.heading), 0.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace mrslam
