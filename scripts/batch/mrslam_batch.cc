@@ -286,6 +286,7 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
 constexpr double kSolveEveryS = 10.0;
 struct SmootherRun {
   RobotRun joint, alone;
+  common::Pose2 joint_t_0i;  // the joint estimate's T(G_first <- G_i)
 };
 std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::uint64_t seed, bool calibrate,
                                          bool progress) {
@@ -305,10 +306,11 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
     const common::Pose2 true_0i = common::Between(frames[0].second, frames[i].second);
     guesses.push_back(common::Compose(common::Compose(true_0i, starts[i]), {0.3, 0.3, common::kPi / 36}));
   }
-  robot_agent::MapReference joint(options, all, guesses, options.rendezvous.enable_from_step);
+  const auto joint_ref = MakeReference(options, all, guesses, options.rendezvous.enable_from_step);
+  robot_agent::MapReference& joint = *joint_ref;
   std::vector<std::unique_ptr<robot_agent::MapReference>> alone;
   alone.reserve(n);
-  for (int i = 0; i < n; ++i) alone.push_back(std::make_unique<robot_agent::MapReference>(options, i));
+  for (int i = 0; i < n; ++i) alone.push_back(MakeReference(options, {i}, {}, 0));
   if (calibrate) {
     joint.EstimateOdometryCalibration();
     for (auto& a : alone) a->EstimateOdometryCalibration();
@@ -362,6 +364,7 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   for (int i = 0; i < n; ++i) {
     // The rigid motion that puts robot i's estimated first pose at its known one.
     out[i].joint = score(i, joint, i, common::Compose(starts[i], common::Inverse(joint.FirstPose(i))));
+    out[i].joint_t_0i = common::Compose(joint.FirstPose(i), common::Inverse(starts[i]));
     out[i].alone = score(i, *alone[i], 0, common::Pose2{});
   }
   return out;
@@ -478,7 +481,8 @@ int PrintTransformReference(const common::ScenarioOptions& options, std::uint64_
 }
 
 // --smoother: per robot, median and 90th percentile over the seeds, joint and alone, with the
-// configured odometry calibration and with it estimated.
+// configured odometry calibration and with it estimated; the JSON also gets, per seed, every
+// robot's frame as the joint estimate (as configured) places it in the first robot's frame.
 int PrintSmoother(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds, int threads,
                   const std::string& json_path) {
   // Task 2s + c: seed s, calibration estimated if c.
@@ -509,6 +513,14 @@ int PrintSmoother(const common::ScenarioOptions& options, std::uint64_t first_se
       }
       std::printf("\n");
     }
+  }
+  // Per seed, the joint estimate's frames (as configured): T(G_first <- G_i) per robot.
+  for (int s = 0; s < num_seeds; ++s) {
+    std::vector<std::array<double, 3>> frames;
+    for (const SmootherRun& r : results[2 * static_cast<std::size_t>(s)]) {
+      frames.push_back({r.joint_t_0i.x, r.joint_t_0i.y, r.joint_t_0i.heading});
+    }
+    json["joint_frames"][std::to_string(first_seed + s)] = frames;
   }
   std::printf("median over the robots of the position RMSE:");
   for (int v = 0; v < 4; ++v)

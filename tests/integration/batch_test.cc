@@ -1,6 +1,6 @@
-// mrslam_batch --transform-reference on a scenario whose landmarks come from a landmark_field
-// (swarm_8): the joint MAP reference knows the field's static landmarks, and the JSON holds each
-// met pair's transform per seed, the one its error is measured of.
+// mrslam_batch's references on a scenario whose landmarks come from a landmark_field (swarm_8):
+// they know the field's static landmarks. --transform-reference's JSON holds each met pair's
+// transform per seed, the one its error is measured of; --smoother's the frames it places.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -54,6 +54,29 @@ TEST(BatchTransformReferenceTest, PlacesAMetPairOnALandmarkField) {
   EXPECT_NEAR(composed.x, 0.0, 1e-9);
   EXPECT_NEAR(composed.y, 0.0, 1e-9);
   EXPECT_NEAR(common::WrapAngle(composed.heading), 0.0, 1e-9);
+}
+
+// --smoother on the same field: the JSON holds each seed's frames as the joint smoother of every
+// robot's data places them in the first robot's frame.
+TEST(BatchSmootherTest, PlacesEveryFrameOnALandmarkField) {
+  const testing::TempDir temp_dir("mrslam-batch");
+  const std::string json_path = temp_dir.path() + "/smoother.json";
+  const std::string log = temp_dir.path() + "/batch.log";
+  ChildProcess batch({BinPath("mrslam_batch"), "--scenario", SourcePath("config/swarm_8.yaml"), "--seeds", "1..1",
+                      "--set", "run.steps=40", "--smoother", "--json", json_path},
+                     log);
+  ASSERT_EQ(batch.WaitExit(seconds(300)), std::optional<int>(0)) << testing::ReadFile(log);
+
+  const auto json = nlohmann::json::parse(testing::ReadFile(json_path));
+  const auto frames = json.at("joint_frames").at("1").get<std::vector<std::array<double, 3>>>();
+  const auto scenario = common::LoadScenario(SourcePath("config/swarm_8.yaml"), {});
+  ASSERT_EQ(frames.size(), scenario.robots.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const common::Pose2 truth = common::Between(scenario.robots[0].frame_in_world, scenario.robots[i].frame_in_world);
+    EXPECT_LT(std::hypot(frames[i][0] - truth.x, frames[i][1] - truth.y), 0.5) << scenario.robots[i].id;
+    EXPECT_LT(common::DegFromRad(std::abs(common::WrapAngle(frames[i][2] - truth.heading))), 5.0)
+        << scenario.robots[i].id;
+  }
 }
 
 }  // namespace
