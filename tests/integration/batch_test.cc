@@ -26,17 +26,24 @@ using testing::BinPath;
 using testing::ChildProcess;
 using testing::SourcePath;
 
-TEST(BatchTransformReferenceTest, PlacesAMetPairOnALandmarkField) {
+// mrslam_batch on swarm_8, seed 1, with the given steps and mode flag; its JSON (empty, and the
+// test failed, if it did not exit 0).
+nlohmann::json RunBatch(int steps, const std::string& mode) {
   const testing::TempDir temp_dir("mrslam-batch");
-  const std::string json_path = temp_dir.path() + "/reference.json";
+  const std::string json_path = temp_dir.path() + "/batch.json";
   const std::string log = temp_dir.path() + "/batch.log";
-  // Seed 1's r1 and r2 meet at step 4.
   ChildProcess batch({BinPath("mrslam_batch"), "--scenario", SourcePath("config/swarm_8.yaml"), "--seeds", "1..1",
-                      "--set", "run.steps=20", "--transform-reference", "--json", json_path},
+                      "--set", "run.steps=" + std::to_string(steps), mode, "--json", json_path},
                      log);
-  ASSERT_EQ(batch.WaitExit(seconds(300)), std::optional<int>(0)) << testing::ReadFile(log);
+  const std::optional<int> exit_code = batch.WaitExit(seconds(300));
+  EXPECT_EQ(exit_code, std::optional<int>(0)) << testing::ReadFile(log);
+  return exit_code == std::optional<int>(0) ? nlohmann::json::parse(testing::ReadFile(json_path)) : nlohmann::json{};
+}
 
-  const auto json = nlohmann::json::parse(testing::ReadFile(json_path));
+TEST(BatchTransformReferenceTest, PlacesAMetPairOnALandmarkField) {
+  // Seed 1's r1 and r2 meet at step 4.
+  const nlohmann::json json = RunBatch(20, "--transform-reference");
+  ASSERT_TRUE(json.contains("pairs"));
   const auto& pair = json.at("pairs").at("r1<-r2");
   ASSERT_EQ(pair.at("seeds").get<std::vector<std::uint64_t>>(), std::vector<std::uint64_t>{1});
   const auto t = pair.at("joint_transform").at(0).get<std::array<double, 3>>();
@@ -59,15 +66,8 @@ TEST(BatchTransformReferenceTest, PlacesAMetPairOnALandmarkField) {
 // --smoother on the same field: the JSON holds each seed's frames as the joint smoother of every
 // robot's data places them in the first robot's frame.
 TEST(BatchSmootherTest, PlacesEveryFrameOnALandmarkField) {
-  const testing::TempDir temp_dir("mrslam-batch");
-  const std::string json_path = temp_dir.path() + "/smoother.json";
-  const std::string log = temp_dir.path() + "/batch.log";
-  ChildProcess batch({BinPath("mrslam_batch"), "--scenario", SourcePath("config/swarm_8.yaml"), "--seeds", "1..1",
-                      "--set", "run.steps=40", "--smoother", "--json", json_path},
-                     log);
-  ASSERT_EQ(batch.WaitExit(seconds(300)), std::optional<int>(0)) << testing::ReadFile(log);
-
-  const auto json = nlohmann::json::parse(testing::ReadFile(json_path));
+  const nlohmann::json json = RunBatch(40, "--smoother");
+  ASSERT_TRUE(json.contains("joint_frames"));
   const auto frames = json.at("joint_frames").at("1").get<std::vector<std::array<double, 3>>>();
   const auto scenario = common::LoadScenario(SourcePath("config/swarm_8.yaml"), {});
   ASSERT_EQ(frames.size(), scenario.robots.size());
