@@ -48,21 +48,6 @@ std::map<int, MapReference::Kinematics> OracleKinematics(const common::ScenarioO
   return kinematics;
 }
 
-// The scenario's robots of the set: the first from its known start, the others from the guesses.
-std::vector<MapReference::RobotStart> OracleRobots(const common::ScenarioOptions& options,
-                                                   const std::vector<int>& robot_indices,
-                                                   const std::vector<Pose2>& first_pose_guesses) {
-  if (robot_indices.empty() || first_pose_guesses.size() + 1 != robot_indices.size()) {
-    throw std::invalid_argument("the reference needs one first-pose guess per robot after the first");
-  }
-  std::vector<MapReference::RobotStart> robots;
-  for (std::size_t r = 0; r < robot_indices.size(); ++r) {
-    const common::RobotOptions& robot = options.robots.at(robot_indices[r]);
-    robots.push_back({robot.id, r == 0 ? InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]});
-  }
-  return robots;
-}
-
 }  // namespace
 
 // Appends the rows of one whitened residual block: r (size n) and its Jacobian blocks
@@ -86,12 +71,26 @@ struct MapReference::Rows {
   }
 };
 
+std::vector<MapReference::RobotStart> MapReference::Starts(const common::ScenarioOptions& options,
+                                                           const std::vector<int>& robot_indices,
+                                                           const std::vector<Pose2>& first_pose_guesses) {
+  if (robot_indices.empty() || first_pose_guesses.size() + 1 != robot_indices.size()) {
+    throw std::invalid_argument("the reference needs one first-pose guess per robot after the first");
+  }
+  std::vector<RobotStart> robots;
+  for (std::size_t r = 0; r < robot_indices.size(); ++r) {
+    const common::RobotOptions& robot = options.robots.at(robot_indices[r]);
+    robots.push_back({robot.id, r == 0 ? InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]});
+  }
+  return robots;
+}
+
 MapReference::MapReference(const common::ScenarioOptions& options, int robot_index)
     : MapReference(options, std::vector<int>{robot_index}, {}, 0) {}
 
 MapReference::MapReference(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
                            const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step)
-    : MapReference(options, OracleRobots(options, robot_indices, first_pose_guesses), OracleKinematics(options),
+    : MapReference(options, Starts(options, robot_indices, first_pose_guesses), OracleKinematics(options),
                    robot_detections_from_step) {
   replay_ = options.replay.enabled;
 }

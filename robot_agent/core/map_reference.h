@@ -67,6 +67,10 @@ class MapReference {
   // count from step robot_detections_from_step on.
   MapReference(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
                const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step);
+  // The robots of the set as the oracle constructors start them: the first at its known first
+  // pose in its own frame, the others from first_pose_guesses (one per further robot).
+  static std::vector<RobotStart> Starts(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
+                                        const std::vector<common::Pose2>& first_pose_guesses);
   // Without oracle knowledge: the readings' landmark_id fields are labels chosen by the caller,
   // each landmark's kinematics is given by label (a reading of a label not listed is left out),
   // and the robots' first poses are given. options supply the step, the noise models and the

@@ -28,6 +28,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -202,25 +203,27 @@ struct PairErrors {
   common::Pose2 joint_t_ij;  // the joint reference's T(G_i <- G_j) (when they met)
 };
 
-// The joint MAP reference of the robots (scenario indices; the first at its known first pose,
-// the others started from the guesses). With a landmark_field it knows the field's static
-// landmarks only and leaves the readings of its movers out: they shuttle back and forth, a
-// motion the reference does not model.
+// The MAP reference of the robots (scenario indices; the first at its known first pose, the
+// others started from the guesses). With a landmark_field it knows the field's static landmarks
+// only (field_statics, from FieldStatics) and leaves the readings of its movers out: they shuttle
+// back and forth, a motion the reference does not model.
+using Kinematics = std::map<int, robot_agent::MapReference::Kinematics>;
+std::optional<Kinematics> FieldStatics(const common::ScenarioOptions& options) {
+  if (!options.landmark_field.enabled) return std::nullopt;
+  Kinematics statics;
+  for (const auto& l : world_sim::ExpandLandmarks(options)) {
+    if (l.motion.model == common::LandmarkMotionModel::kStatic) statics[l.id] = {};
+  }
+  return statics;
+}
 std::unique_ptr<robot_agent::MapReference> MakeReference(const common::ScenarioOptions& options,
+                                                         const std::optional<Kinematics>& field_statics,
                                                          const std::vector<int>& robots,
                                                          const std::vector<common::Pose2>& guesses, int from_step) {
   using robot_agent::MapReference;
-  if (!options.landmark_field.enabled) return std::make_unique<MapReference>(options, robots, guesses, from_step);
-  std::vector<MapReference::RobotStart> starts;
-  for (std::size_t r = 0; r < robots.size(); ++r) {
-    const common::RobotOptions& robot = options.robots.at(static_cast<std::size_t>(robots[r]));
-    starts.push_back({robot.id, r == 0 ? robot_agent::InitialPoseInOwnFrame(robot) : guesses.at(r - 1)});
-  }
-  std::map<int, MapReference::Kinematics> statics;
-  for (const auto& l : world_sim::ExpandLandmarks(options)) {
-    if (l.motion.model == common::LandmarkMotionModel::kStatic) statics[l.id] = MapReference::Kinematics{};
-  }
-  return std::make_unique<MapReference>(options, starts, std::move(statics), from_step);
+  if (!field_statics) return std::make_unique<MapReference>(options, robots, guesses, from_step);
+  return std::make_unique<MapReference>(options, MapReference::Starts(options, robots, guesses), *field_statics,
+                                        from_step);
 }
 
 PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed, int i, int j) {
@@ -231,8 +234,10 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
   // T(G_i <- G_j) maps j's first pose in G_j to its first pose in G_i.
   const common::Pose2 start_j = robot_agent::InitialPoseInOwnFrame(options.robots[j]);
   const common::Pose2 guess = common::Compose(common::Compose(true_ij, start_j), {0.3, 0.3, common::kPi / 36});
-  const auto joint_ref = MakeReference(options, {i, j}, {guess}, options.rendezvous.enable_from_step);
-  const auto own_i_ref = MakeReference(options, {i}, {}, 0), own_j_ref = MakeReference(options, {j}, {}, 0);
+  const std::optional<Kinematics> statics = FieldStatics(options);
+  const auto joint_ref = MakeReference(options, statics, {i, j}, {guess}, options.rendezvous.enable_from_step);
+  const auto own_i_ref = MakeReference(options, statics, {i}, {}, 0);
+  const auto own_j_ref = MakeReference(options, statics, {j}, {}, 0);
   robot_agent::MapReference &joint = *joint_ref, &own_i = *own_i_ref, &own_j = *own_j_ref;
   const std::string& id_i = options.robots[i].id;
   const std::string& id_j = options.robots[j].id;
@@ -306,11 +311,12 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
     const common::Pose2 true_0i = common::Between(frames[0].second, frames[i].second);
     guesses.push_back(common::Compose(common::Compose(true_0i, starts[i]), {0.3, 0.3, common::kPi / 36}));
   }
-  const auto joint_ref = MakeReference(options, all, guesses, options.rendezvous.enable_from_step);
+  const std::optional<Kinematics> statics = FieldStatics(options);
+  const auto joint_ref = MakeReference(options, statics, all, guesses, options.rendezvous.enable_from_step);
   robot_agent::MapReference& joint = *joint_ref;
   std::vector<std::unique_ptr<robot_agent::MapReference>> alone;
   alone.reserve(n);
-  for (int i = 0; i < n; ++i) alone.push_back(MakeReference(options, {i}, {}, 0));
+  for (int i = 0; i < n; ++i) alone.push_back(MakeReference(options, statics, {i}, {}, 0));
   if (calibrate) {
     joint.EstimateOdometryCalibration();
     for (auto& a : alone) a->EstimateOdometryCalibration();
@@ -362,9 +368,10 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   };
   std::vector<SmootherRun> out(n);
   for (int i = 0; i < n; ++i) {
-    // The rigid motion that puts robot i's estimated first pose at its known one.
-    out[i].joint = score(i, joint, i, common::Compose(starts[i], common::Inverse(joint.FirstPose(i))));
+    // T(G_first <- G_i): robot i's estimated first pose over its known one; its inverse is the
+    // rigid motion that puts the estimate into G_i.
     out[i].joint_t_0i = common::Compose(joint.FirstPose(i), common::Inverse(starts[i]));
+    out[i].joint = score(i, joint, i, common::Inverse(out[i].joint_t_0i));
     out[i].alone = score(i, *alone[i], 0, common::Pose2{});
   }
   return out;
