@@ -4,6 +4,7 @@
 #include "common/app.h"
 #include "common/dds/participant.h"
 #include "common/logging.h"
+#include "robot_agent/filters/filter_factory.h"
 #include "robot_agent/node/agent_node.h"
 
 int main(int argc, char** argv) {
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
       throw std::runtime_error("--robot: unknown robot id '" + robot_id + "' (not in scenario '" + scenario.name +
                                "')");
     }
-    auto slam = robot_agent::CreateFilter(scenario, robot_id, scenario.seed);
+    auto slam = robot_agent::filters::CreateFilter(scenario, robot_id, scenario.seed);
     if (!slam) throw std::runtime_error("filter '" + scenario.filter.type + "' is not available");
     robot_agent::AgentNodeOptions options;
     options.robot_id = robot_id;

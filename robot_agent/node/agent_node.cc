@@ -10,8 +10,8 @@
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
-#include "robot_agent/core/cooperation.h"
-#include "robot_agent/core/sample_validation.h"
+#include "robot_agent/cooperation/cooperation.h"
+#include "robot_agent/cooperation/sample_validation.h"
 #include "robot_agent/node/msg_conversion.h"
 
 namespace mrslam::robot_agent {
@@ -35,7 +35,7 @@ struct PeerWriters {
 struct AgentNode::Impl {
   common::ScenarioOptions scenario;
   AgentNodeOptions options;
-  std::unique_ptr<SlamFilter> filter;
+  std::unique_ptr<filters::SlamFilter> filter;
   dds::Participant participant;
   dds::Notifier notifier;
   dds::Reader<msg::LidarScanPubSubType> lidar_reader;
@@ -49,9 +49,9 @@ struct AgentNode::Impl {
   dds::Reader<msg::MapSnapshotPubSubType> map_inbox;
   dds::Reader<msg::LandmarkMovedNoticePubSubType> moved_inbox;
   std::map<std::string, std::unique_ptr<PeerWriters>> peers;
-  Cooperation cooperation;
+  cooperation::Cooperation cooperation;
   // Peer messages received, by the sender's step: applied at the start of the next step.
-  std::map<std::uint32_t, PeerInbox> inbox;
+  std::map<std::uint32_t, cooperation::PeerInbox> inbox;
   std::map<std::pair<std::string, std::uint32_t>, std::uint32_t> received;  // (sender, step) -> count
   std::map<std::string, std::uint32_t> sent_sequence;
   AgentCounters counters;
@@ -63,7 +63,7 @@ struct AgentNode::Impl {
   std::map<std::uint32_t, common::Odometry> odometry;
   std::map<std::uint32_t, msg::StepClock> clock;
 
-  Impl(const common::ScenarioOptions& s, const AgentNodeOptions& o, std::unique_ptr<SlamFilter> f)
+  Impl(const common::ScenarioOptions& s, const AgentNodeOptions& o, std::unique_ptr<filters::SlamFilter> f)
       : scenario(s),
         options(o),
         filter(std::move(f)),
@@ -87,7 +87,7 @@ struct AgentNode::Impl {
   // Buffers a sample of a future or current step, or rejects it.
   template <typename T>
   void Buffer(T sample, std::map<std::uint32_t, T>* buffer, int (*sanitize)(T*), const char* what) {
-    if (const auto problem = StampProblem(sample.stamp, options.robot_id, next_step); !problem.empty()) {
+    if (const auto problem = cooperation::StampProblem(sample.stamp, options.robot_id, next_step); !problem.empty()) {
       Reject(std::string(what) + ": " + problem);
       return;
     }
@@ -105,27 +105,28 @@ struct AgentNode::Impl {
 
   void Drain() {
     msg::LidarScan l;
-    while (lidar_reader.TryTake(&l)) Buffer(dds::FromMsg(l), &lidar, &SanitizeLidar, "lidar");
+    while (lidar_reader.TryTake(&l)) Buffer(dds::FromMsg(l), &lidar, &cooperation::SanitizeLidar, "lidar");
     msg::Imu m;
-    while (imu_reader.TryTake(&m)) Buffer(dds::FromMsg(m), &imu, &SanitizeImu, "imu");
+    while (imu_reader.TryTake(&m)) Buffer(dds::FromMsg(m), &imu, &cooperation::SanitizeImu, "imu");
     msg::Odometry od;
-    while (odometry_reader.TryTake(&od)) Buffer(dds::FromMsg(od), &odometry, &SanitizeOdometry, "odometry");
+    while (odometry_reader.TryTake(&od))
+      Buffer(dds::FromMsg(od), &odometry, &cooperation::SanitizeOdometry, "odometry");
     msg::StepClock c;
     while (clock_reader.TryTake(&c)) {
       if (c.stamp().step() >= next_step) clock[c.stamp().step()] = c;
     }
     msg::RelativeMeasurement r;
-    while (relative_inbox.TryTake(&r)) AcceptPeer(FromMsg(r), &PeerInbox::measurements);
+    while (relative_inbox.TryTake(&r)) AcceptPeer(FromMsg(r), &cooperation::PeerInbox::measurements);
     msg::MapSnapshot ms;
-    while (map_inbox.TryTake(&ms)) AcceptPeer(FromMsg(ms), &PeerInbox::maps);
+    while (map_inbox.TryTake(&ms)) AcceptPeer(FromMsg(ms), &cooperation::PeerInbox::maps);
     msg::LandmarkMovedNotice n;
-    while (moved_inbox.TryTake(&n)) AcceptPeer(FromMsg(n), &PeerInbox::moved);
+    while (moved_inbox.TryTake(&n)) AcceptPeer(FromMsg(n), &cooperation::PeerInbox::moved);
   }
 
   // Buffers a peer message for the start of the step after the one it was sent in, or rejects
   // it (not for us, unknown sender, a step already past).
   template <typename T>
-  void AcceptPeer(T message, std::vector<T> PeerInbox::*list) {
+  void AcceptPeer(T message, std::vector<T> cooperation::PeerInbox::*list) {
     const auto& h = message.header;
     if (h.recipient != options.robot_id) {
       Reject("peer message for '" + h.recipient + "' in " + options.robot_id + "'s inbox");
@@ -160,14 +161,14 @@ struct AgentNode::Impl {
   }
 
   // Sends the outbox of a step; returns the number of messages per recipient.
-  std::map<std::string, std::uint32_t> Send(PeerOutbox outbox) {
+  std::map<std::string, std::uint32_t> Send(cooperation::PeerOutbox outbox) {
     std::map<std::string, std::uint32_t> counts;
     auto writers = [&](const std::string& peer) -> PeerWriters& {
       auto& w = peers[peer];
       if (!w) w = std::make_unique<PeerWriters>(participant, peer);
       return *w;
     };
-    auto stamp = [&](PeerHeader* h) { h->sequence = ++sent_sequence[h->recipient]; };
+    auto stamp = [&](cooperation::PeerHeader* h) { h->sequence = ++sent_sequence[h->recipient]; };
     for (auto& m : outbox.measurements) {
       stamp(&m.header);
       SendTo(writers(m.header.recipient).relative, ToMsg(m), m.header.recipient, &counts);
@@ -199,7 +200,7 @@ struct AgentNode::Impl {
       throw AgentError("DDS refused to publish the acknowledgement of step " + std::to_string(step));
   }
 
-  static void SortBySender(PeerInbox* in) {
+  static void SortBySender(cooperation::PeerInbox* in) {
     auto order = [](const auto& a, const auto& b) {
       return std::tie(a.header.sender, a.header.sequence) < std::tie(b.header.sender, b.header.sequence);
     };
@@ -213,8 +214,8 @@ struct AgentNode::Impl {
   void LogRendezvous(std::uint32_t step, bool last) {
     const auto& events = cooperation.rendezvous();
     for (; rendezvous_logged < events.size(); ++rendezvous_logged) {
-      const RendezvousEvent& e = events[rendezvous_logged];
-      if (!last && Cooperation::WithinRefinement(e.step, step)) return;
+      const cooperation::RendezvousEvent& e = events[rendezvous_logged];
+      if (!last && cooperation::Cooperation::WithinRefinement(e.step, step)) return;
       const Eigen::Vector3d sd = e.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
       spdlog::info(
           "rendezvous with {} at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad), sd ({:.3f} m, {:.3f} m, "
@@ -254,8 +255,8 @@ struct AgentNode::Impl {
     odometry.erase(k);
     clock.erase(k);
     filter->Process(step);
-    const FilterEstimate estimate = filter->Estimate();
-    PeerOutbox outbox = cooperation.AfterStep(step, estimate);
+    const filters::FilterEstimate estimate = filter->Estimate();
+    cooperation::PeerOutbox outbox = cooperation.AfterStep(step, estimate);
     outbox.moved = cooperation.MovedNotices(filter->TakeMovedLandmarks(), k, time_s);
     const auto sent = Send(std::move(outbox));
     LogRendezvous(k, *last);
@@ -272,7 +273,7 @@ struct AgentNode::Impl {
 };
 
 AgentNode::AgentNode(const common::ScenarioOptions& scenario, const AgentNodeOptions& options,
-                     std::unique_ptr<SlamFilter> filter)
+                     std::unique_ptr<filters::SlamFilter> filter)
     : impl_(std::make_unique<Impl>(scenario, options, std::move(filter))) {}
 
 AgentNode::~AgentNode() = default;

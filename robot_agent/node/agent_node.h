@@ -6,7 +6,7 @@
 #include <string>
 
 #include "common/config/scenario_options.h"
-#include "robot_agent/core/slam_filter.h"
+#include "robot_agent/filters/slam_filter.h"
 
 namespace mrslam::robot_agent {
 
@@ -38,7 +38,7 @@ struct AgentCounters {
 class AgentNode {
  public:
   AgentNode(const common::ScenarioOptions& scenario, const AgentNodeOptions& options,
-            std::unique_ptr<SlamFilter> filter);
+            std::unique_ptr<filters::SlamFilter> filter);
   ~AgentNode();
   AgentNode(const AgentNode&) = delete;
   AgentNode& operator=(const AgentNode&) = delete;

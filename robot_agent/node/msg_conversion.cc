@@ -5,13 +5,15 @@
 namespace mrslam::robot_agent {
 
 namespace {
-msg::Stamp HeaderStamp(const PeerHeader& h) { return dds::ToMsg(common::Stamp{h.sender, h.step, h.time_s}); }
-PeerHeader HeaderFrom(const msg::Stamp& s, const std::string& recipient, std::uint32_t sequence) {
+msg::Stamp HeaderStamp(const cooperation::PeerHeader& h) {
+  return dds::ToMsg(common::Stamp{h.sender, h.step, h.time_s});
+}
+cooperation::PeerHeader HeaderFrom(const msg::Stamp& s, const std::string& recipient, std::uint32_t sequence) {
   return {s.robot_id(), recipient, s.step(), s.time_s(), sequence};
 }
 }  // namespace
 
-msg::LandmarkEstimate ToMsg(const MapLandmark& l) {
+msg::LandmarkEstimate ToMsg(const filters::MapLandmark& l) {
   msg::LandmarkEstimate m;
   m.track_id(l.track_id);
   m.landmark_id(l.landmark_id);
@@ -28,15 +30,15 @@ msg::LandmarkEstimate ToMsg(const MapLandmark& l) {
   return m;
 }
 
-MapLandmark FromMsg(const msg::LandmarkEstimate& m) {
-  MapLandmark l;
+filters::MapLandmark FromMsg(const msg::LandmarkEstimate& m) {
+  filters::MapLandmark l;
   l.track_id = m.track_id();
   l.landmark_id = m.landmark_id();
   l.mean = {m.pose().x_m(), m.pose().y_m(), m.pose().heading_rad()};
   l.covariance = dds::CovarianceFromMsg(m.covariance());
   l.v_mps = m.v_mps();
   l.w_radps = m.w_radps();
-  l.motion = static_cast<LandmarkMotionKind>(m.motion_model());
+  l.motion = static_cast<filters::LandmarkMotionKind>(m.motion_model());
   l.moving = m.moving();
   l.tentative = m.tentative();
   l.last_seen_step = m.last_seen_step();
@@ -45,7 +47,7 @@ MapLandmark FromMsg(const msg::LandmarkEstimate& m) {
   return l;
 }
 
-msg::RendezvousEvent ToMsg(const RendezvousEvent& e) {
+msg::RendezvousEvent ToMsg(const cooperation::RendezvousEvent& e) {
   msg::RendezvousEvent m;
   m.peer_id(e.peer);
   m.step(e.step);
@@ -53,17 +55,17 @@ msg::RendezvousEvent ToMsg(const RendezvousEvent& e) {
   m.covariance(dds::CovarianceToMsg(e.covariance));
   return m;
 }
-RendezvousEvent FromMsg(const msg::RendezvousEvent& m) {
+cooperation::RendezvousEvent FromMsg(const msg::RendezvousEvent& m) {
   return {m.peer_id(), m.step(), dds::FromMsg(m.t_self_peer()), dds::CovarianceFromMsg(m.covariance())};
 }
-msg::RendezvousEvent ToMsg(const FrameTransform& t) {
-  return ToMsg(RendezvousEvent{t.peer, t.step, t.t_self_peer, t.covariance});
+msg::RendezvousEvent ToMsg(const cooperation::FrameTransform& t) {
+  return ToMsg(cooperation::RendezvousEvent{t.peer, t.step, t.t_self_peer, t.covariance});
 }
-FrameTransform TransformFromMsg(const msg::RendezvousEvent& m) {
+cooperation::FrameTransform TransformFromMsg(const msg::RendezvousEvent& m) {
   return {m.peer_id(), m.step(), dds::FromMsg(m.t_self_peer()), dds::CovarianceFromMsg(m.covariance())};
 }
 
-msg::Estimate ToMsg(const FilterEstimate& e, const std::string& robot_id, const std::string& filter) {
+msg::Estimate ToMsg(const filters::FilterEstimate& e, const std::string& robot_id, const std::string& filter) {
   msg::Estimate m;
   m.stamp(dds::ToMsg(common::Stamp{robot_id, e.step, e.time_s}));
   m.filter(filter);
@@ -75,8 +77,8 @@ msg::Estimate ToMsg(const FilterEstimate& e, const std::string& robot_id, const 
   return m;
 }
 
-FilterEstimate FromMsg(const msg::Estimate& m) {
-  FilterEstimate e;
+filters::FilterEstimate FromMsg(const msg::Estimate& m) {
+  filters::FilterEstimate e;
   e.step = m.stamp().step();
   e.time_s = m.stamp().time_s();
   e.pose = dds::FromMsg(m.pose());
@@ -87,7 +89,7 @@ FilterEstimate FromMsg(const msg::Estimate& m) {
   return e;
 }
 
-msg::RelativeMeasurement ToMsg(const RelativeMeasurement& r) {
+msg::RelativeMeasurement ToMsg(const cooperation::RelativeMeasurement& r) {
   msg::RelativeMeasurement m;
   m.stamp(HeaderStamp(r.header));
   m.recipient_id(r.header.recipient);
@@ -99,8 +101,8 @@ msg::RelativeMeasurement ToMsg(const RelativeMeasurement& r) {
   m.sender_covariance(dds::CovarianceToMsg(r.sender_covariance));
   return m;
 }
-RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
-  RelativeMeasurement r;
+cooperation::RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
+  cooperation::RelativeMeasurement r;
   r.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
   r.has_range = m.has_range();
   r.range_m = m.range_m();
@@ -110,7 +112,7 @@ RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
   return r;
 }
 
-msg::MapSnapshot ToMsg(const MapSnapshot& s) {
+msg::MapSnapshot ToMsg(const cooperation::MapSnapshot& s) {
   msg::MapSnapshot m;
   m.stamp(HeaderStamp(s.header));
   m.recipient_id(s.header.recipient);
@@ -126,8 +128,8 @@ msg::MapSnapshot ToMsg(const MapSnapshot& s) {
   }
   return m;
 }
-MapSnapshot FromMsg(const msg::MapSnapshot& m) {
-  MapSnapshot s;
+cooperation::MapSnapshot FromMsg(const msg::MapSnapshot& m) {
+  cooperation::MapSnapshot s;
   s.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
   for (const auto& l : m.landmarks()) s.landmarks.push_back(FromMsg(l));
   for (const auto& t : m.known_transforms()) s.known_transforms.push_back(TransformFromMsg(t));
@@ -141,7 +143,7 @@ MapSnapshot FromMsg(const msg::MapSnapshot& m) {
   return s;
 }
 
-msg::LandmarkMovedNotice ToMsg(const LandmarkMovedNotice& n) {
+msg::LandmarkMovedNotice ToMsg(const cooperation::LandmarkMovedNotice& n) {
   msg::LandmarkMovedNotice m;
   m.stamp(HeaderStamp(n.header));
   m.recipient_id(n.header.recipient);
@@ -151,8 +153,8 @@ msg::LandmarkMovedNotice ToMsg(const LandmarkMovedNotice& n) {
   m.position_in_sender(dds::ToMsg(common::Pose2{n.position_in_sender.x(), n.position_in_sender.y(), 0.0}));
   return m;
 }
-LandmarkMovedNotice FromMsg(const msg::LandmarkMovedNotice& m) {
-  LandmarkMovedNotice n;
+cooperation::LandmarkMovedNotice FromMsg(const msg::LandmarkMovedNotice& m) {
+  cooperation::LandmarkMovedNotice n;
   n.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
   n.track_id = m.track_id();
   n.landmark_id = m.landmark_id();

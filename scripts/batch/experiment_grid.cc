@@ -52,7 +52,8 @@
 #include "common/dds/participant.h"
 #include "common/progress_line.h"
 #include "mrslamPubSubTypes.h"
-#include "robot_agent/core/slam_filter.h"
+#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/node/msg_conversion.h"
 #include "scripts/launch/domain_picker.h"
 #include "scripts/launch/process_supervisor.h"
@@ -125,7 +126,7 @@ class RunScorer {
       : options_(options), n_(options.robots.size()), frame_rmse_(n_), position_sq_(n_), reached_(n_), last_map_(n_) {}
 
   // One frame: the truth and each robot's estimate, in scenario order.
-  void AddFrame(const common::GroundTruth& truth, const std::vector<robot_agent::FilterEstimate>& estimates) {
+  void AddFrame(const common::GroundTruth& truth, const std::vector<robot_agent::filters::FilterEstimate>& estimates) {
     true_landmarks_.clear();
     is_static_.clear();
     for (const auto& l : truth.landmarks) {
@@ -135,7 +136,7 @@ class RunScorer {
     for (std::size_t i = 0; i < n_; ++i) {
       const common::Pose2& frame = options_.robots[i].frame_in_world;
       const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
-      const robot_agent::FilterEstimate& e = estimates[i];
+      const robot_agent::filters::FilterEstimate& e = estimates[i];
       const double pe = evaluator::PositionError(e.pose, truth_own);
       position_sq_[i].push_back(pe * pe);
       std::vector<evaluator::MapPoint>& map = last_map_[i];
@@ -236,13 +237,13 @@ Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
       if (l.moving) movers.insert(std::stoi(l.id));
     }
   }
-  std::vector<std::unique_ptr<robot_agent::SlamFilter>> filters;
+  std::vector<std::unique_ptr<robot_agent::filters::SlamFilter>> filters;
   for (const auto& robot : options.robots) {
-    filters.push_back(robot_agent::CreateFilter(options, robot.id, options.seed));
+    filters.push_back(robot_agent::filters::CreateFilter(options, robot.id, options.seed));
     if (!filters.back()) throw std::runtime_error("filter.type " + job.filter + " is not implemented");
   }
   RunScorer scorer(options);
-  std::vector<robot_agent::FilterEstimate> estimates(filters.size());
+  std::vector<robot_agent::filters::FilterEstimate> estimates(filters.size());
   for (int k = 0; k < frames; ++k) {
     std::vector<common::SensorStep> steps = world.Step();
     for (std::size_t i = 0; i < filters.size(); ++i) {
@@ -305,7 +306,7 @@ Row RunJobMultiProcess(const common::ScenarioOptions& base, const MultiProcessSe
   children.Start("world_sim", command("world_sim", {"--wait-readers", "1"}), logs + "world_sim.log");
 
   std::map<std::uint32_t, common::GroundTruth> truth;
-  std::vector<std::map<std::uint32_t, robot_agent::FilterEstimate>> estimates(options.robots.size());
+  std::vector<std::map<std::uint32_t, robot_agent::filters::FilterEstimate>> estimates(options.robots.size());
   const auto drain = [&](std::chrono::milliseconds wait) {
     bool any = false;
     msg::GroundTruth t;
@@ -341,7 +342,7 @@ Row RunJobMultiProcess(const common::ScenarioOptions& base, const MultiProcessSe
   }
 
   RunScorer scorer(options);
-  std::vector<robot_agent::FilterEstimate> frame(options.robots.size());
+  std::vector<robot_agent::filters::FilterEstimate> frame(options.robots.size());
   for (int k = 1; k <= frames; ++k) {
     const auto step = static_cast<std::uint32_t>(k);
     if (!truth.count(step)) throw std::runtime_error("no truth for step " + std::to_string(k));

@@ -7,7 +7,7 @@
 //   dead-reckoning RMSE (m): odometry integrated from the known initial pose.
 // Prints the median and 90th percentile over seeds per robot, optionally writes them (and the
 // per-seed values) as JSON. Progress goes to stderr. With --reference, the approximately ideal
-// filter (MapReference: batch MAP with oracle association and kinematics) replaces each robot's
+// filter (BatchSmoother: batch MAP with oracle association and kinematics) replaces each robot's
 // own filter, on the same data (the lidar reports identities; nothing else changes). With
 // --transform-reference it prints instead, per ordered pair of robots, the error of the transform
 // T(G_i <- G_j) at the end of their first encounter (DESIGN.md) as the joint MAP reference of
@@ -41,11 +41,12 @@
 #include "common/config/scenario_options.h"
 #include "common/progress_line.h"
 #include "common/se2.h"
-#include "robot_agent/core/map_reference.h"
-#include "robot_agent/core/slam_filter.h"
-#include "world_sim/core/step_source.h"
+#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/smoother/batch_smoother.h"
 #include "world_sim/core/world.h"
 #include "world_sim/evaluator/metrics.h"
+#include "world_sim/source/step_source_factory.h"
 
 namespace mrslam {
 namespace {
@@ -95,9 +96,9 @@ class Estimator {
  public:
   Estimator(const common::ScenarioOptions& options, int robot_index, std::uint64_t seed, bool reference) {
     if (reference) {
-      reference_ = std::make_unique<robot_agent::MapReference>(options, robot_index);
+      reference_ = std::make_unique<robot_agent::smoother::BatchSmoother>(options, robot_index);
     } else {
-      filter_ = robot_agent::CreateFilter(options, options.robots[robot_index].id, seed);
+      filter_ = robot_agent::filters::CreateFilter(options, options.robots[robot_index].id, seed);
       if (!filter_) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
     }
   }
@@ -116,7 +117,7 @@ class Estimator {
   Output Estimate() const {
     Output out;
     if (filter_) {
-      const robot_agent::FilterEstimate e = filter_->Estimate();
+      const robot_agent::filters::FilterEstimate e = filter_->Estimate();
       out.pose = e.pose;
       for (const auto& l : e.landmarks) out.map.push_back({l.mean.head<2>(), l.landmark_id});
     } else {
@@ -127,8 +128,8 @@ class Estimator {
   }
 
  private:
-  std::unique_ptr<robot_agent::SlamFilter> filter_;
-  std::unique_ptr<robot_agent::MapReference> reference_;
+  std::unique_ptr<robot_agent::filters::SlamFilter> filter_;
+  std::unique_ptr<robot_agent::smoother::BatchSmoother> reference_;
 };
 
 // Runs one seed: the scenario's step source (the simulated World, or the replay of a recorded data
@@ -142,7 +143,7 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
   std::vector<common::Pose2> dead_reckoning;
   for (std::size_t i = 0; i < n; ++i) {
     estimators.emplace_back(options, static_cast<int>(i), seed, reference);
-    dead_reckoning.push_back(robot_agent::InitialPoseInOwnFrame(options.robots[i]));
+    dead_reckoning.push_back(robot_agent::filters::InitialPoseInOwnFrame(options.robots[i]));
   }
   std::vector<std::vector<double>> position(n), heading(n), landmark(n), dr(n);
   for (int k = 0; k < options.run.steps; ++k) {
@@ -207,7 +208,7 @@ struct PairErrors {
 // others started from the guesses). With a landmark_field it knows the field's static landmarks
 // only (field_statics, from FieldStatics) and leaves the readings of its movers out: they shuttle
 // back and forth, a motion the reference does not model.
-using Kinematics = std::map<int, robot_agent::MapReference::Kinematics>;
+using Kinematics = std::map<int, robot_agent::smoother::BatchSmoother::Kinematics>;
 std::optional<Kinematics> FieldStatics(const common::ScenarioOptions& options) {
   if (!options.landmark_field.enabled) return std::nullopt;
   Kinematics statics;
@@ -216,14 +217,15 @@ std::optional<Kinematics> FieldStatics(const common::ScenarioOptions& options) {
   }
   return statics;
 }
-std::unique_ptr<robot_agent::MapReference> MakeReference(const common::ScenarioOptions& options,
-                                                         const std::optional<Kinematics>& field_statics,
-                                                         const std::vector<int>& robots,
-                                                         const std::vector<common::Pose2>& guesses, int from_step) {
-  using robot_agent::MapReference;
-  if (!field_statics) return std::make_unique<MapReference>(options, robots, guesses, from_step);
-  return std::make_unique<MapReference>(options, MapReference::Starts(options, robots, guesses), *field_statics,
-                                        from_step);
+std::unique_ptr<robot_agent::smoother::BatchSmoother> MakeReference(const common::ScenarioOptions& options,
+                                                                    const std::optional<Kinematics>& field_statics,
+                                                                    const std::vector<int>& robots,
+                                                                    const std::vector<common::Pose2>& guesses,
+                                                                    int from_step) {
+  using robot_agent::smoother::BatchSmoother;
+  if (!field_statics) return std::make_unique<BatchSmoother>(options, robots, guesses, from_step);
+  return std::make_unique<BatchSmoother>(options, BatchSmoother::Starts(options, robots, guesses), *field_statics,
+                                         from_step);
 }
 
 PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed, int i, int j) {
@@ -232,13 +234,13 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
   const auto frames = source->Truth().frames;
   const common::Pose2 true_ij = common::Between(frames[i].second, frames[j].second);
   // T(G_i <- G_j) maps j's first pose in G_j to its first pose in G_i.
-  const common::Pose2 start_j = robot_agent::InitialPoseInOwnFrame(options.robots[j]);
+  const common::Pose2 start_j = robot_agent::filters::InitialPoseInOwnFrame(options.robots[j]);
   const common::Pose2 guess = common::Compose(common::Compose(true_ij, start_j), {0.3, 0.3, common::kPi / 36});
   const std::optional<Kinematics> statics = FieldStatics(options);
   const auto joint_ref = MakeReference(options, statics, {i, j}, {guess}, options.rendezvous.enable_from_step);
   const auto own_i_ref = MakeReference(options, statics, {i}, {}, 0);
   const auto own_j_ref = MakeReference(options, statics, {j}, {}, 0);
-  robot_agent::MapReference &joint = *joint_ref, &own_i = *own_i_ref, &own_j = *own_j_ref;
+  robot_agent::smoother::BatchSmoother &joint = *joint_ref, &own_i = *own_i_ref, &own_j = *own_j_ref;
   const std::string& id_i = options.robots[i].id;
   const std::string& id_j = options.robots[j].id;
   auto sees = [](const common::SensorStep& step, const std::string& id) {
@@ -284,7 +286,7 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
 // from the truth displaced by (0.3 m, 0.3 m, 5 deg)), moved into each robot's own frame by its
 // known first pose (the solution is the same up to a rigid motion whichever first pose is the
 // known one); "alone", each robot's data alone. Each also with every robot's odometry factors and
-// turn-rate bias estimated (MapReference::EstimateOdometryCalibration). Landmark RMSE: the final
+// turn-rate bias estimated (BatchSmoother::EstimateOdometryCalibration). Landmark RMSE: the final
 // map, all its landmarks against the truth at the last step. Solved every kSolveEveryS of run
 // time (warm-started: Gauss-Newton from the dead-reckoned paths of a whole run falls into local
 // minima) and at the end.
@@ -306,15 +308,15 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   starts.reserve(n);
   for (int i = 0; i < n; ++i) {
     all.push_back(i);
-    starts.push_back(robot_agent::InitialPoseInOwnFrame(options.robots[i]));
+    starts.push_back(robot_agent::filters::InitialPoseInOwnFrame(options.robots[i]));
     if (i == 0) continue;
     const common::Pose2 true_0i = common::Between(frames[0].second, frames[i].second);
     guesses.push_back(common::Compose(common::Compose(true_0i, starts[i]), {0.3, 0.3, common::kPi / 36}));
   }
   const std::optional<Kinematics> statics = FieldStatics(options);
   const auto joint_ref = MakeReference(options, statics, all, guesses, options.rendezvous.enable_from_step);
-  robot_agent::MapReference& joint = *joint_ref;
-  std::vector<std::unique_ptr<robot_agent::MapReference>> alone;
+  robot_agent::smoother::BatchSmoother& joint = *joint_ref;
+  std::vector<std::unique_ptr<robot_agent::smoother::BatchSmoother>> alone;
   alone.reserve(n);
   for (int i = 0; i < n; ++i) alone.push_back(MakeReference(options, statics, {i}, {}, 0));
   if (calibrate) {
@@ -346,7 +348,7 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   std::vector<evaluator::TruePoint> true_landmarks;
   for (const auto& l : last_truth.landmarks) true_landmarks.push_back({l.pose.Translation(), std::stoi(l.id)});
   // Scores robot i's path of `reference` (robot r of its set), moved by `to_own` into G_i.
-  auto score = [&](int i, const robot_agent::MapReference& reference, int r, const common::Pose2& to_own) {
+  auto score = [&](int i, const robot_agent::smoother::BatchSmoother& reference, int r, const common::Pose2& to_own) {
     RobotRun run;
     std::vector<double> position, heading, landmark;
     const std::vector<common::Pose2>& path = reference.Path(r);

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "common/angles.h"
-#include "robot_agent/core/peer_messages.h"
+#include "robot_agent/cooperation/peer_messages.h"
 #include "robot_agent/node/msg_conversion.h"
 #include "tests/integration/child_process.h"
 #include "tests/integration/fake_simulator.h"
@@ -71,7 +71,7 @@ TEST(MovedNoticeTest, NoticeFromAPeerDropsThatLandmarkOnly) {
 
   // Step 1: both robots see each other (r2's measurement of r1: range 3, bearing -pi/2).
   ASSERT_TRUE(sim.PublishStep(1, ScanAtOrigin(), 0.0, 0.0));
-  robot_agent::RelativeMeasurement m;
+  robot_agent::cooperation::RelativeMeasurement m;
   m.header = {"r2", "r1", 1, kDt, 1};
   m.range_m = 3.0;
   m.bearing_rad = -kPi / 2;
@@ -84,7 +84,7 @@ TEST(MovedNoticeTest, NoticeFromAPeerDropsThatLandmarkOnly) {
   // that A, at (5.5, -3) in G2, moved.
   ASSERT_TRUE(sim.PublishStep(2, ScanAtOrigin(), 0.0, 0.0, {{"r2", 1}}));
   ASSERT_EQ(sim.WaitAck(2), 0) << testing::ReadFile(dir + "/agent.log");
-  robot_agent::LandmarkMovedNotice n;
+  robot_agent::cooperation::LandmarkMovedNotice n;
   n.header = {"r2", "r1", 2, 2 * kDt, 2};
   n.position_in_sender = {5.5, -3.0};
   ASSERT_TRUE(to_r1_moved.Write(robot_agent::ToMsg(n)));

@@ -6,8 +6,8 @@
 namespace mrslam::robot_agent {
 namespace {
 
-MapLandmark SomeLandmark(int k) {
-  MapLandmark l;
+filters::MapLandmark SomeLandmark(int k) {
+  filters::MapLandmark l;
   l.track_id = 10U + static_cast<std::uint32_t>(k);
   l.landmark_id = k - 1;
   l.mean = {1.0 * k, -2.0, 0.3};
@@ -15,7 +15,7 @@ MapLandmark SomeLandmark(int k) {
   l.covariance(0, 1) = l.covariance(1, 0) = 0.01;
   l.v_mps = 0.4;
   l.w_radps = 0.2;
-  l.motion = LandmarkMotionKind::kUnicycle;
+  l.motion = filters::LandmarkMotionKind::kUnicycle;
   l.moving = true;
   l.tentative = k % 2 == 0;
   l.last_seen_step = 42;
@@ -24,7 +24,7 @@ MapLandmark SomeLandmark(int k) {
   return l;
 }
 
-void ExpectSame(const MapLandmark& a, const MapLandmark& b) {
+void ExpectSame(const filters::MapLandmark& a, const filters::MapLandmark& b) {
   EXPECT_EQ(a.track_id, b.track_id);
   EXPECT_EQ(a.landmark_id, b.landmark_id);
   EXPECT_EQ(a.mean, b.mean);
@@ -40,7 +40,7 @@ void ExpectSame(const MapLandmark& a, const MapLandmark& b) {
 }
 
 TEST(AgentMsgConversionTest, EstimateRoundTrip) {
-  FilterEstimate e;
+  filters::FilterEstimate e;
   e.step = 9;
   e.time_s = 5.85;
   e.pose = {1.0, 2.0, -0.4};
@@ -63,7 +63,7 @@ TEST(AgentMsgConversionTest, EstimateRoundTrip) {
 }
 
 TEST(AgentMsgConversionTest, PeerMessagesRoundTrip) {
-  RelativeMeasurement r;
+  cooperation::RelativeMeasurement r;
   r.header = {"r1", "r2", 14, 9.1, 3};
   r.range_m = 4.2;
   r.bearing_rad = -1.1;
@@ -79,7 +79,7 @@ TEST(AgentMsgConversionTest, PeerMessagesRoundTrip) {
   EXPECT_EQ(rb.sender_pose.y, r.sender_pose.y);
   EXPECT_EQ(rb.sender_covariance, r.sender_covariance);
 
-  MapSnapshot s;
+  cooperation::MapSnapshot s;
   s.header = {"r3", "r1", 20, 13.0, 1};
   s.landmarks = {SomeLandmark(3)};
   s.known_transforms.push_back({"r4", 18, {1.0, -2.0, 0.6}, Eigen::Matrix3d::Identity() * 0.05});
@@ -94,7 +94,7 @@ TEST(AgentMsgConversionTest, PeerMessagesRoundTrip) {
   EXPECT_TRUE(sb.history.empty());
 
   // A snapshot with a history: its first pose and every step's odometry and scan.
-  MapSnapshot h = s;
+  cooperation::MapSnapshot h = s;
   h.first_pose = {-0.2, -0.5, 1.23};
   for (std::uint32_t k = 1; k <= 3; ++k) {
     common::SensorStep step;
@@ -119,7 +119,7 @@ TEST(AgentMsgConversionTest, PeerMessagesRoundTrip) {
     EXPECT_EQ(hb.history[i].odometry.segments[0].w_radps, 0.2);
   }
 
-  LandmarkMovedNotice n;
+  cooperation::LandmarkMovedNotice n;
   n.header = {"r2", "r1", 30, 19.5, 7};
   n.track_id = 5;
   n.landmark_id = 12;

@@ -6,4 +6,4 @@ mrslam_add_test(agent_msg_conversion_test
 # Sample validation in the filter core.
 mrslam_add_test(sample_validation_test
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/sample_validation_test.cc
-  LIBS mrslam_agent_core)
+  LIBS mrslam_agent_cooperation)

@@ -3,10 +3,10 @@
 # (rendezvous, snapshots, transitive frames) and the rejection of hostile peer input.
 mrslam_add_test(map_fusion_test
   SOURCES map_fusion_test.cc
-  LIBS mrslam_agent_core)
+  LIBS mrslam_agent_filters)
 mrslam_add_test(cooperation_test
   SOURCES cooperation_test.cc
-  LIBS mrslam_agent_core)
+  LIBS mrslam_agent_cooperation)
 mrslam_add_test(joint_transform_test
   SOURCES joint_transform_test.cc
-  LIBS mrslam_agent_core mrslam_world_core)
+  LIBS mrslam_agent_cooperation mrslam_world_source)

@@ -1,4 +1,5 @@
-#include "robot_agent/core/cooperation.h"
+#include "robot_agent/cooperation/cooperation.h"
+#include "robot_agent/filters/filter_factory.h"
 
 #include <cmath>
 #include <functional>
@@ -17,12 +18,12 @@
 
 #include "common/gaussian.h"
 #include "common/rng.h"
-#include "robot_agent/core/fastslam.h"
-#include "robot_agent/core/map_fusion.h"
-#include "robot_agent/core/rendezvous.h"
+#include "robot_agent/cooperation/rendezvous.h"
+#include "robot_agent/filters/fastslam.h"
+#include "robot_agent/filters/map_fusion.h"
 #include "tests/robot_agent/tiny_world.h"
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::cooperation {
 namespace {
 
 using common::Pose2;
@@ -407,18 +408,18 @@ TEST(Alignment, BothSidesGetInverseTransforms) {
 // Cooperation among agents, in process, with a fake filter.
 
 // A filter whose estimate the test sets; merges like FastSLAM's rule for one hypothesis.
-class FakeFilter : public SlamFilter {
+class FakeFilter : public filters::SlamFilter {
  public:
   void Process(const common::SensorStep&) override {}
-  FilterEstimate Estimate() const override { return estimate; }
-  int MergeLandmarks(const std::vector<MapLandmark>& in, common::MapFusionRule rule, double gate_probability,
+  filters::FilterEstimate Estimate() const override { return estimate; }
+  int MergeLandmarks(const std::vector<filters::MapLandmark>& in, common::MapFusionRule rule, double gate_probability,
                      double /*too_close_m*/) override {
     ++merges;
-    std::vector<MatchCandidate> own, incoming;
+    std::vector<filters::MatchCandidate> own, incoming;
     for (const auto& l : estimate.landmarks)
       own.push_back({l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id});
     for (const auto& l : in) incoming.push_back({l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id});
-    const std::vector<int> match = MatchLandmarks(own, incoming, common::ChiSquare2Quantile(gate_probability));
+    const std::vector<int> match = filters::MatchLandmarks(own, incoming, common::ChiSquare2Quantile(gate_probability));
     int added = 0;
     for (std::size_t i = 0; i < in.size(); ++i) {
       if (match[i] < 0) {
@@ -427,10 +428,10 @@ class FakeFilter : public SlamFilter {
         ++added;
         continue;
       }
-      MapLandmark& l = estimate.landmarks[match[i]];
+      filters::MapLandmark& l = estimate.landmarks[match[i]];
       Eigen::VectorXd x = l.mean.head<2>();
       Eigen::MatrixXd p = l.covariance.topLeftCorner<2, 2>();
-      FuseObservation(&x, &p, in[i].mean.head<2>(), in[i].covariance.topLeftCorner<2, 2>(), rule);
+      filters::FuseObservation(&x, &p, in[i].mean.head<2>(), in[i].covariance.topLeftCorner<2, 2>(), rule);
       l.mean.head<2>() = x;
       l.covariance.topLeftCorner<2, 2>() = p;
     }
@@ -445,7 +446,7 @@ class FakeFilter : public SlamFilter {
     return true;
   }
 
-  FilterEstimate estimate;
+  filters::FilterEstimate estimate;
   int merges = 0;
   int robot_observations = 0;
   std::vector<std::pair<Eigen::Vector2d, Eigen::Matrix2d>> notices;
@@ -485,7 +486,7 @@ class Sim {
       agents_.push_back(std::make_unique<Cooperation>(scenario_, scenario_.robots[i].id));
       filters_.push_back(std::make_unique<FakeFilter>());
       for (std::size_t l = i; l <= i + 1; ++l) {
-        MapLandmark m;
+        filters::MapLandmark m;
         m.track_id = static_cast<std::uint32_t>(l + 1);
         const Eigen::Vector2d p = common::TransformPoint(common::Inverse(Frame(i)), landmarks_[l]);
         m.covariance = Eigen::Vector3d(1e-3, 1e-3, 1.0).asDiagonal();
@@ -529,7 +530,7 @@ class Sim {
     for (std::size_t i = 0; i < n; ++i) {
       agents_[i]->Receive(inbox_[i], filters_[i].get());
       const Eigen::Matrix3d cov = Eigen::Vector3d(4e-4, 4e-4, 1e-4).asDiagonal();
-      FilterEstimate& e = filters_[i]->estimate;
+      filters::FilterEstimate& e = filters_[i]->estimate;
       e.step = k;
       e.time_s = 0.65 * k;
       e.covariance = cov;
@@ -632,7 +633,7 @@ TEST(Cooperation, OwnLandmarksAreSharedOnceSeenLongEnough) {
   const auto r2_landmarks_after_merge = [](std::uint32_t first, int origin) {
     Sim sim(
         Scenario(3), [](std::uint32_t k, int i, int j) { return i == 0 && j == 1 && k >= 5 && k <= 30; }, 21);
-    MapLandmark& l = sim.filter(0).estimate.landmarks[0];
+    filters::MapLandmark& l = sim.filter(0).estimate.landmarks[0];
     l.origin_robot = origin;
     l.origin_track = l.track_id;
     l.first_seen_step = first;
@@ -778,7 +779,7 @@ class HostileInput : public ::testing::Test {
   MapSnapshot GoodSnapshot() const {
     MapSnapshot m;
     m.header = {"r2", "r1", sim_.step(), 13.0, 1};
-    MapLandmark l;
+    filters::MapLandmark l;
     l.mean = {10.0, 10.0, 0.0};
     l.covariance = Eigen::Vector3d(0.01, 0.01, 1.0).asDiagonal();
     m.landmarks.push_back(l);
@@ -823,13 +824,13 @@ TEST_F(HostileInput, MoversWithAnEstimatedMotionAreNotMerged) {
   // that follows known kinematics is merged.
   MapSnapshot estimated = GoodSnapshot();
   estimated.landmarks[0].moving = true;
-  estimated.landmarks[0].motion = LandmarkMotionKind::kConstantTurnRate;
+  estimated.landmarks[0].motion = filters::LandmarkMotionKind::kConstantTurnRate;
   const int merges = sim_.filter(0).merges;
   sim_.agent(0).Receive({{}, {estimated}, {}}, &sim_.filter(0));
   EXPECT_EQ(sim_.filter(0).merges, merges);
   MapSnapshot known = GoodSnapshot();
   known.landmarks[0].moving = true;
-  known.landmarks[0].motion = LandmarkMotionKind::kUnicycle;
+  known.landmarks[0].motion = filters::LandmarkMotionKind::kUnicycle;
   sim_.agent(0).Receive({{}, {known}, {}}, &sim_.filter(0));
   EXPECT_EQ(sim_.filter(0).merges, merges + 1);
   EXPECT_EQ(sim_.agent(0).rejected_messages(), 0);
@@ -995,7 +996,7 @@ TEST_F(HostileInput, MovedNoticeReachesTheFilterInTheOwnFrame) {
 }
 
 TEST_F(HostileInput, MovedNoticesGoOnlyToPeersWhoseFrameIsKnown) {
-  MovedLandmark m;
+  filters::MovedLandmark m;
   m.track_id = 4;
   m.position = {3.0, -1.0};
   const auto notices = sim_.agent(0).MovedNotices({m}, sim_.step(), 13.0);
@@ -1023,7 +1024,7 @@ class WithFastSlam : public ::testing::TestWithParam<common::LandmarkKinematics>
     r2.frame_in_world = {1.0, 1.0, 0.5};
     options_.robots.push_back(r2);
     options_.rendezvous.enable_from_step = 0;
-    filter_ = CreateFilter(options_, "r1", 3);
+    filter_ = filters::CreateFilter(options_, "r1", 3);
     testing::TinyWorld world(options_, 3);
     for (int k = 0; k < 8; ++k) filter_->Process(world.Step());
     ASSERT_EQ(filter_->Estimate().landmarks.size(), 2u);
@@ -1031,7 +1032,7 @@ class WithFastSlam : public ::testing::TestWithParam<common::LandmarkKinematics>
 
   // Lets r1's agent learn r2's frame from one mutual detection at step 8 (the filter's step).
   void Meet(Cooperation* agent) {
-    const FilterEstimate e = filter_->Estimate();
+    const filters::FilterEstimate e = filter_->Estimate();
     common::LidarScan scan;
     scan.stamp = {"r1", e.step, e.time_s};
     scan.robots.push_back({e.time_s, 2.0, 0.3, "r2"});
@@ -1049,16 +1050,16 @@ class WithFastSlam : public ::testing::TestWithParam<common::LandmarkKinematics>
   }
 
   common::ScenarioOptions options_;
-  std::unique_ptr<SlamFilter> filter_;
+  std::unique_ptr<filters::SlamFilter> filter_;
 };
 
 // Particles of a FastSLAM filter (of any state dimension) holding more than n landmarks, and
 // the number of particles.
 template <int D>
-const FastSlam<D>* AsFastSlam(const SlamFilter& f) {
-  return dynamic_cast<const FastSlam<D>*>(&f);
+const filters::FastSlam<D>* AsFastSlam(const filters::SlamFilter& f) {
+  return dynamic_cast<const filters::FastSlam<D>*>(&f);
 }
-int ParticlesHoldingMoreThan(const SlamFilter& f, int n) {
+int ParticlesHoldingMoreThan(const filters::SlamFilter& f, int n) {
   int out = 0;
   const auto count = [&](const auto* fast) {
     for (int p = 0; fast != nullptr && p < fast->NumParticles(); ++p) out += fast->ParticleLandmarkCount(p) > n ? 1 : 0;
@@ -1068,9 +1069,9 @@ int ParticlesHoldingMoreThan(const SlamFilter& f, int n) {
   count(AsFastSlam<5>(f));
   return out;
 }
-int NumParticlesOf(const SlamFilter& f) { return f.Estimate().particles; }
+int NumParticlesOf(const filters::SlamFilter& f) { return f.Estimate().particles; }
 
-void ExpectSameEstimate(const FilterEstimate& a, const FilterEstimate& b) {
+void ExpectSameEstimate(const filters::FilterEstimate& a, const filters::FilterEstimate& b) {
   EXPECT_EQ(a.pose.Vector(), b.pose.Vector());
   ASSERT_EQ(a.landmarks.size(), b.landmarks.size());
   for (std::size_t i = 0; i < a.landmarks.size(); ++i) {
@@ -1081,8 +1082,8 @@ void ExpectSameEstimate(const FilterEstimate& a, const FilterEstimate& b) {
 }
 
 TEST_P(WithFastSlam, MergeFusesMatchedAndAddsNewLandmarks) {
-  const FilterEstimate before = filter_->Estimate();
-  std::vector<MapLandmark> in(2);
+  const filters::FilterEstimate before = filter_->Estimate();
+  std::vector<filters::MapLandmark> in(2);
   // The first landmark as a peer with the same knowledge would hold it.
   in[0].mean = before.landmarks[0].mean;
   in[0].covariance = before.landmarks[0].covariance;
@@ -1097,7 +1098,7 @@ TEST_P(WithFastSlam, MergeFusesMatchedAndAddsNewLandmarks) {
   } else {
     EXPECT_EQ(added, 1);
   }
-  const FilterEstimate after = filter_->Estimate();
+  const filters::FilterEstimate after = filter_->Estimate();
   ASSERT_EQ(after.landmarks.size(), 3u);
   int near_new = 0;
   for (const auto& l : after.landmarks) {
@@ -1126,7 +1127,7 @@ TEST_P(WithFastSlam, MergeFusesMatchedAndAddsNewLandmarks) {
 // the map, as an own landmark would.
 TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   ASSERT_EQ(options_.filter.max_landmark_position_sd_m, 2.0);
-  const auto count_near = [](const FilterEstimate& e, const Eigen::Vector2d& at) {
+  const auto count_near = [](const filters::FilterEstimate& e, const Eigen::Vector2d& at) {
     int n = 0;
     for (const auto& l : e.landmarks) n += (l.mean.head<2>() - at).norm() < 1.0 ? 1 : 0;
     return n;
@@ -1134,11 +1135,11 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   const Eigen::Vector2d far(-20.0, -20.0), farther(-30.0, 20.0);  // out of view, unmatched
   const Eigen::Vector2d still(20.0, -20.0);                       // the same, static for the peer
   // The first two with the filter's motion model, as a peer of the same scenario reports them.
-  const LandmarkMotionKind kind = GetParam() == common::LandmarkKinematics::kStatic ? LandmarkMotionKind::kStatic
-                                  : GetParam() == common::LandmarkKinematics::kKnownCandidates
-                                      ? LandmarkMotionKind::kUnicycle
-                                      : LandmarkMotionKind::kConstantTurnRate;
-  std::vector<MapLandmark> in(3);
+  const filters::LandmarkMotionKind kind =
+      GetParam() == common::LandmarkKinematics::kStatic            ? filters::LandmarkMotionKind::kStatic
+      : GetParam() == common::LandmarkKinematics::kKnownCandidates ? filters::LandmarkMotionKind::kUnicycle
+                                                                   : filters::LandmarkMotionKind::kConstantTurnRate;
+  std::vector<filters::MapLandmark> in(3);
   in[0].mean = {far.x(), far.y(), 0.0};
   in[0].covariance = Eigen::Vector3d(1.9, 1.9, 3.0).asDiagonal();  // sd sqrt(3.8) < 2 m
   in[0].motion = kind;
@@ -1148,14 +1149,14 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   in[2].mean = {still.x(), still.y(), 0.0};
   in[2].covariance = Eigen::Vector3d(1.9, 1.9, 0.01).asDiagonal();
   in[2].v_mps = 0.3;  // a static report whose mixture still carries a heading and a speed
-  in[2].motion = LandmarkMotionKind::kStatic;
+  in[2].motion = filters::LandmarkMotionKind::kStatic;
   EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.0), 2);
   EXPECT_EQ(count_near(filter_->Estimate(), far), 1);
   EXPECT_EQ(count_near(filter_->Estimate(), farther), 0);
   EXPECT_EQ(count_near(filter_->Estimate(), still), 1);
   testing::TinyWorld world(options_, 5);
   for (int k = 0; k < 10; ++k) filter_->Process(world.Step());
-  const FilterEstimate after = filter_->Estimate();
+  const filters::FilterEstimate after = filter_->Estimate();
   // Static landmarks keep their covariance when unseen; a motion model spreads it every step. A
   // constant-turn-rate filter keeps a landmark the peer takes as static static; known
   // candidates have no static model.
@@ -1174,12 +1175,12 @@ TEST_P(WithFastSlam, MergeLeavesOutPeerLandmarksTooCloseToOwnOnes) {
   if (GetParam() == common::LandmarkKinematics::kConstantTurnRate) {
     GTEST_SKIP() << "whether the own landmark is static differs from particle to particle";
   }
-  const FilterEstimate before = filter_->Estimate();
+  const filters::FilterEstimate before = filter_->Estimate();
   ASSERT_FALSE(before.landmarks.empty());
-  std::vector<MapLandmark> in(1);
+  std::vector<filters::MapLandmark> in(1);
   in[0].mean = before.landmarks[0].mean + Eigen::Vector3d(1.0, 0.0, 0.0);
   in[0].covariance = Eigen::Vector3d(1e-4, 1e-4, 3.0).asDiagonal();  // 1 m off, far beyond the gate
-  in[0].motion = LandmarkMotionKind::kStatic;
+  in[0].motion = filters::LandmarkMotionKind::kStatic;
   const int added = filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 1.5);
   if (GetParam() == common::LandmarkKinematics::kKnownCandidates) {
     EXPECT_EQ(added, 1);
@@ -1192,9 +1193,9 @@ TEST_P(WithFastSlam, MergeLeavesOutPeerLandmarksTooCloseToOwnOnes) {
 }
 
 TEST_P(WithFastSlam, MergeKeepsCopyOnWriteSharing) {
-  auto* fast = dynamic_cast<FastSlam<2>*>(filter_.get());
+  auto* fast = dynamic_cast<filters::FastSlam<2>*>(filter_.get());
   if (fast == nullptr) GTEST_SKIP() << "checked on the static instantiation";
-  std::vector<MapLandmark> in(1);
+  std::vector<filters::MapLandmark> in(1);
   in[0].mean = {-3.0, -2.0, 0.0};
   in[0].covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
   filter_->MergeLandmarks(in, common::MapFusionRule::kWeighted, 0.999, 0.0);
@@ -1206,10 +1207,10 @@ TEST_P(WithFastSlam, MergeKeepsCopyOnWriteSharing) {
 TEST_P(WithFastSlam, RejectedSnapshotsLeaveTheEstimateUnchanged) {
   Cooperation agent(options_, "r1");
   Meet(&agent);
-  const FilterEstimate before = filter_->Estimate();
+  const filters::FilterEstimate before = filter_->Estimate();
   MapSnapshot good;
   good.header = {"r2", "r1", before.step, before.time_s, 2};
-  MapLandmark l;
+  filters::MapLandmark l;
   l.mean = {-3.0, -3.0, 0.0};  // far from the own landmarks: added
   l.covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
   good.landmarks.push_back(l);
@@ -1230,10 +1231,10 @@ TEST_P(WithFastSlam, RejectedSnapshotsLeaveTheEstimateUnchanged) {
 }
 
 TEST_P(WithFastSlam, ObservingAKnownRobotReweightsParticles) {
-  auto* fast = dynamic_cast<FastSlam<2>*>(filter_.get());
+  auto* fast = dynamic_cast<filters::FastSlam<2>*>(filter_.get());
   if (fast == nullptr) GTEST_SKIP() << "checked on the static instantiation";
   // A robot 2 m ahead of the mean pose: particles that agree gain weight.
-  const FilterEstimate e = filter_->Estimate();
+  const filters::FilterEstimate e = filter_->Estimate();
   const Eigen::Vector2d there = common::PointFromRangeBearing(e.pose, {2.0, 0.0});
   const double gate = common::ChiSquare2Quantile(0.9999);
   ASSERT_TRUE(filter_->ObserveKnownRobot(there, Eigen::Matrix2d::Identity() * 1e-4, 2.0, 0.0, gate));
@@ -1299,4 +1300,4 @@ TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::cooperation

@@ -1,7 +1,8 @@
 // EKF-SLAM core: measurement and motion Jacobians against numeric differences, the Joseph-form
 // update keeping the covariance symmetric positive definite (seeded property test), and the
 // filter on a small simulated world (consistency, association, map merging).
-#include "robot_agent/core/ekf_slam.h"
+#include "robot_agent/filters/ekf_slam.h"
+#include "robot_agent/filters/filter_factory.h"
 
 #include <cmath>
 #include <memory>
@@ -11,10 +12,10 @@
 
 #include "common/gaussian.h"
 #include "common/rng.h"
-#include "robot_agent/core/slam_filter.h"
+#include "robot_agent/filters/slam_filter.h"
 #include "tests/robot_agent/tiny_world.h"
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::filters {
 namespace {
 
 using testing::AddLandmark;
@@ -228,4 +229,4 @@ TEST(EkfSlamTest, MergeLeavesOutLandmarksTooCloseToMappedOnes) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::filters

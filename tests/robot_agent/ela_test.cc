@@ -6,7 +6,7 @@
 // while it creeps; a mapped landmark that starts to creep is taken out by the drift test); and in
 // a static world (dynamic_world with moving_fraction 0: under 1 % of the observations flagged,
 // landmark RMSE at most 5 % above the plain EKF's, robot RMSE within 5 % of it).
-#include "robot_agent/core/ela.h"
+#include "robot_agent/filters/ela.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,12 +19,12 @@
 
 #include "common/config/scenario_options.h"
 #include "common/rng.h"
-#include "robot_agent/core/ekf_slam.h"
+#include "robot_agent/filters/ekf_slam.h"
 #include "tests/robot_agent/tiny_world.h"
 #include "world_sim/core/world.h"
 #include "world_sim/evaluator/metrics.h"
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::filters {
 namespace {
 
 constexpr double kVarR = 0.05 * 0.05, kVarB = 0.0175 * 0.0175;
@@ -446,4 +446,4 @@ TEST(ElaTest, StaticWorldFlagsFewAndMatchesPlainEkf) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::filters

@@ -12,11 +12,11 @@
 #include <benchmark/benchmark.h>
 
 #include "common/rng.h"
-#include "robot_agent/core/fastslam.h"
-#include "robot_agent/core/landmark_ekf.h"
+#include "robot_agent/filters/fastslam.h"
+#include "robot_agent/filters/landmark_ekf.h"
 #include "tests/robot_agent/tiny_world.h"
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::filters {
 namespace {
 
 void BM_LandmarkUpdates(benchmark::State& state) {
@@ -102,6 +102,6 @@ BENCHMARK(BM_FullStepStatic)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FullStepConstantTurnRate)->Unit(benchmark::kMillisecond);
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::filters
 
 BENCHMARK_MAIN();

@@ -1,4 +1,5 @@
-#include "robot_agent/core/fastslam.h"
+#include "robot_agent/filters/fastslam.h"
+#include "robot_agent/filters/filter_factory.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,10 +10,10 @@
 #include <Eigen/Dense>
 
 #include "common/angles.h"
-#include "robot_agent/core/slam_filter.h"
+#include "robot_agent/filters/slam_filter.h"
 #include "tests/robot_agent/tiny_world.h"
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::filters {
 namespace {
 
 using testing::AddLandmark;
@@ -394,4 +395,4 @@ TEST(SlamFilter, CreatesEveryKnownFilterAndNothingElse) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::filters

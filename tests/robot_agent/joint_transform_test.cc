@@ -10,14 +10,15 @@
 #include "common/angles.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
-#include "robot_agent/core/cooperation.h"
-#include "robot_agent/core/rendezvous.h"
-#include "robot_agent/core/slam_filter.h"
-#include "world_sim/core/step_source.h"
+#include "robot_agent/cooperation/cooperation.h"
+#include "robot_agent/cooperation/rendezvous.h"
+#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/filters/slam_filter.h"
+#include "world_sim/source/step_source_factory.h"
 
 // The joint estimate of the transform at a rendezvous (cooperation.joint_transform): two FastSLAM
 // agents on paper_two_robots.yaml in one process, their peer messages passed by hand in lockstep.
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::cooperation {
 namespace {
 
 const std::string kPaperScenario = std::string(MRSLAM_TEST_SOURCE_DIR) + "/config/paper_two_robots.yaml";
@@ -36,16 +37,17 @@ Outcome RunToTheFirstJointEstimate(const common::ScenarioOptions& o) {
   Outcome out;
   out.truth = common::Between(frames[0].second, frames[1].second);
   const std::string ids[2] = {o.robots[0].id, o.robots[1].id};
-  std::unique_ptr<SlamFilter> filters[2] = {CreateFilter(o, ids[0], o.seed), CreateFilter(o, ids[1], o.seed)};
+  std::unique_ptr<filters::SlamFilter> slams[2] = {filters::CreateFilter(o, ids[0], o.seed),
+                                                   filters::CreateFilter(o, ids[1], o.seed)};
   Cooperation agents[2] = {Cooperation(o, ids[0]), Cooperation(o, ids[1])};
   PeerInbox inbox[2];
   for (int k = 0; k < o.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();
     PeerInbox next[2];
     for (int i = 0; i < 2; ++i) {
-      agents[i].Receive(inbox[i], filters[i].get());
-      filters[i]->Process(steps[i]);
-      PeerOutbox sent = agents[i].AfterStep(steps[i], filters[i]->Estimate());
+      agents[i].Receive(inbox[i], slams[i].get());
+      slams[i]->Process(steps[i]);
+      PeerOutbox sent = agents[i].AfterStep(steps[i], slams[i]->Estimate());
       next[1 - i] = std::move(sent);
     }
     for (int i = 0; i < 2; ++i) inbox[i] = std::move(next[i]);
@@ -110,4 +112,4 @@ TEST(JointTransform, BothSidesAgreeAndTheCovarianceCoversTheError) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::cooperation

@@ -1,4 +1,4 @@
-#include "robot_agent/core/landmark_ekf.h"
+#include "robot_agent/filters/landmark_ekf.h"
 
 #include <cmath>
 
@@ -8,7 +8,7 @@
 #include "common/rng.h"
 #include "common/se2.h"
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::filters {
 namespace {
 
 constexpr int kTrials = 1000;
@@ -238,4 +238,4 @@ TEST(GateBlock, MatchesEigenReference) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::filters

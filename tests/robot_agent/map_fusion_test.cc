@@ -1,4 +1,4 @@
-#include "robot_agent/core/map_fusion.h"
+#include "robot_agent/filters/map_fusion.h"
 
 #include <cmath>
 
@@ -10,7 +10,7 @@
 #include "common/gaussian.h"
 #include "common/rng.h"
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::filters {
 namespace {
 
 using common::MapFusionRule;
@@ -259,4 +259,4 @@ TEST(MatchLandmarks, DifferentIdentitiesNeverMatch) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::filters

@@ -1,13 +1,13 @@
-#include "robot_agent/core/resampling.h"
+#include "robot_agent/filters/resampling.h"
 
 #include <cmath>
 #include <numeric>
 
 #include <gtest/gtest.h>
 
-#include "robot_agent/core/association.h"
+#include "robot_agent/filters/association.h"
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::filters {
 namespace {
 
 TEST(NormalizeLogWeights, SumsToOneAndKeepsRatios) {
@@ -113,4 +113,4 @@ TEST(NearestUnused, SkipsUsedLandmarks) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::filters

@@ -1,11 +1,11 @@
 // Malformed samples are removed and counted before the filter sees them.
-#include "robot_agent/core/sample_validation.h"
+#include "robot_agent/cooperation/sample_validation.h"
 
 #include <gtest/gtest.h>
 
 #include <limits>
 
-namespace mrslam::robot_agent {
+namespace mrslam::robot_agent::cooperation {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -41,4 +41,4 @@ TEST(SampleValidationTest, StampProblems) {
 }
 
 }  // namespace
-}  // namespace mrslam::robot_agent
+}  // namespace mrslam::robot_agent::cooperation

@@ -19,11 +19,12 @@
 #include <gtest/gtest.h>
 
 #include "common/config/scenario_options.h"
-#include "robot_agent/core/slam_filter.h"
+#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/filters/slam_filter.h"
 #include "tests/test_paths.h"
-#include "world_sim/core/step_source.h"
 #include "world_sim/replay/mrclam_reader.h"
 #include "world_sim/replay/mrclam_replay.h"
+#include "world_sim/source/step_source_factory.h"
 
 namespace mrslam::world_sim {
 namespace {
@@ -327,7 +328,7 @@ TEST(MrclamCalibrationTest, FastSlamDelaysAndScalesTheCommands) {
   o.filter.odometry_scale = 0.9;
   o.filter.odometry_turn_scale = 0.8;
   o.filter.odometry_lag_s = 0.2;
-  const auto filter = robot_agent::CreateFilter(o, "r1", 1);
+  const auto filter = robot_agent::filters::CreateFilter(o, "r1", 1);
   ASSERT_NE(filter, nullptr);
   std::vector<double> x;
   double heading = 0.0;

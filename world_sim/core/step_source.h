@@ -1,7 +1,6 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
 #include <vector>
 
 #include "common/config/scenario_options.h"
@@ -23,9 +22,5 @@ class StepSource {
   virtual std::uint32_t step() const = 0;
   virtual double time_s() const = 0;
 };
-
-// The scenario's source: the simulated world, or the recorded data set when replay.dir is set
-// (throws MrclamError when one of its files is missing).
-std::unique_ptr<StepSource> MakeStepSource(const common::ScenarioOptions& options);
 
 }  // namespace mrslam::world_sim

@@ -14,6 +14,7 @@
 #include "mrslamPubSubTypes.h"
 #include "world_sim/core/world.h"
 #include "world_sim/replay/mrclam_replay.h"
+#include "world_sim/source/step_source_factory.h"
 
 namespace mrslam::world_sim {
 

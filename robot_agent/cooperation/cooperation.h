@@ -1,0 +1,164 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/config/scenario_options.h"
+#include "robot_agent/cooperation/peer_messages.h"
+#include "robot_agent/cooperation/rendezvous.h"
+#include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/smoother/batch_smoother.h"
+
+namespace mrslam::robot_agent::cooperation {
+
+// An agent's side of the cooperation among robots (paper A step 4, for N robots): the
+// rendezvous detector, the frame transforms to peers (estimated from mutual range-bearing
+// measurements, refined over an encounter, chained through peers' transforms), the map
+// snapshots it sends and the merging of the snapshots it receives into its filter, and the
+// validation of everything a peer sends. Pure: plain structs in and out; the node moves them.
+//
+// Per step k the node calls, in this order:
+//   1. Receive(inbox of step k-1, filter)   peer messages sent during step k-1, in a fixed order
+//   2. filter->Process(step k)
+//   3. AfterStep(step k, estimate k)         -> the outbox of step k
+class Cooperation {
+ public:
+  Cooperation(const common::ScenarioOptions& scenario, const std::string& robot_id);
+
+  // Validates and applies peer messages. Rejected messages are counted and leave the map unchanged.
+  void Receive(const PeerInbox& inbox, filters::SlamFilter* filter);
+
+  // Decides what to send after step k: relative measurements to every robot detected in the
+  // scan (from rendezvous.enable_from_step on), map snapshots to peers at a new rendezvous.
+  // Keeps the step (odometry, scan labelled by estimate.detection_tracks) in the own history.
+  PeerOutbox AfterStep(const common::SensorStep& step, const filters::FilterEstimate& estimate);
+
+  // "Landmark moved" notices for every peer whose frame is known (paper B, peer to peer instead
+  // of through a leader), for the landmarks the filter saw move during the step.
+  std::vector<LandmarkMovedNotice> MovedNotices(const std::vector<filters::MovedLandmark>& moved, std::uint32_t step,
+                                                double time_s) const;
+
+  // Whether an estimate made at step still refines the rendezvous of an encounter that began at
+  // encounter_first: its transform is refined over the encounter's first kEncounterRefineSteps
+  // steps (DESIGN.md scores it after them), then held as it is in rendezvous().
+  static bool WithinRefinement(std::uint32_t encounter_first, std::uint32_t step) {
+    return step <= encounter_first + kEncounterRefineSteps;
+  }
+
+  // Every rendezvous so far (for the estimate stream and the log), and the frames known.
+  const std::vector<RendezvousEvent>& rendezvous() const;
+  std::vector<FrameTransform> known_transforms() const;
+  std::vector<std::string> frames_known() const;
+  int rejected_messages() const;
+  // Every transform estimated jointly from both robots' histories (cooperation.joint_transform),
+  // in order: the peer, the snapshot's step, the estimate.
+  const std::vector<FrameTransform>& joint_estimates() const { return joint_estimates_; }
+  // Landmark-moved notices accepted so far (the ELA filter will use them).
+  int moved_notices() const { return moved_notices_; }
+  // Mutual detections used to correct the own pose (cooperative localization).
+  int cooperative_updates() const { return cooperative_updates_; }
+
+ private:
+  // The own detection of a peer at a step, with the own pose estimate of that step.
+  struct OwnDetection {
+    double range_m = 0.0;
+    double bearing_rad = 0.0;
+    common::Pose2 pose;
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  };
+  static constexpr std::uint32_t kEncounterRefineSteps = 10;
+
+  // Everything known about one peer.
+  struct PeerState {
+    std::optional<TransformEstimate> transform;  // T(G_self <- G_peer)
+    bool met = false;                            // from own mutual detections (else chained)
+    // The last mutual detection lay beyond the transform gate of the one held: one of the two
+    // robots is off in its own frame, and a snapshot from the peer is not merged meanwhile.
+    bool last_detection_outlier = false;
+    std::uint32_t transform_step = 0;  // when last estimated
+    // Detections not yet paired into a mutual detection, by step (bounded by the window).
+    std::map<std::uint32_t, OwnDetection> own_detections;
+    std::map<std::uint32_t, RelativeMeasurement> peer_measurements;
+    // The current encounter: a run of mutual detections at most window_steps apart.
+    bool in_encounter = false;
+    std::uint32_t encounter_first = 0, encounter_last = 0;
+    int encounter_pairs = 0;
+    int event_index = -1;  // into rendezvous_ while the encounter refines its event
+    std::optional<std::uint32_t> last_rendezvous_step;
+    bool snapshot_due = false;    // the map and the transforms go to the peer after this step
+    bool transforms_due = false;  // the transforms only (an encounter that is not a rendezvous)
+    // The last step applied per message kind (older ones are stale).
+    std::optional<std::uint32_t> last_measurement_step, last_snapshot_step, last_notice_step;
+  };
+
+  // Checks the parts every message shares: from a known other robot, to this one, not from a
+  // step after the current one.
+  bool HeaderValid(const PeerHeader& h) const;
+  bool MeasurementValid(const RelativeMeasurement& m) const;
+  bool SnapshotValid(const MapSnapshot& m) const;
+  bool HistoryValid(const MapSnapshot& m) const;
+  // Pairs own detections and peer measurements into mutual detections and applies them.
+  void PairMutualDetections(const std::string& peer, filters::SlamFilter* filter);
+  void ApplyMutualDetection(const std::string& peer, std::uint32_t own_step, const OwnDetection& own,
+                            const RelativeMeasurement& theirs, filters::SlamFilter* filter);
+  void ApplySnapshot(const MapSnapshot& m, filters::SlamFilter* filter);
+  // The landmarks both maps hold: the own and the snapshot's (at the same step; those that came
+  // from the other side by provenance left out), matched through the held transform.
+  struct CommonLandmarks {
+    std::vector<filters::MapLandmark> mine, theirs;
+    std::vector<int> match;  // per theirs: the index into mine, or -1
+  };
+  CommonLandmarks MatchSnapshot(const MapSnapshot& m, const filters::FilterEstimate& own,
+                                const TransformEstimate& held) const;
+  // Refines the transform to the snapshot's sender by the landmarks both maps hold (aligned by
+  // AlignLandmarks with the held one as prior).
+  void AlignWithSnapshot(const MapSnapshot& m, const CommonLandmarks& common, PeerState* sender);
+  // The transform to the snapshot's sender from both robots' histories (the joint MAP estimate
+  // of both paths and the landmarks, BatchSmoother), or nothing when either history is missing
+  // or the estimate fails or disagrees with the held one beyond transform_gate_probability.
+  std::optional<TransformEstimate> JointTransform(const MapSnapshot& m, const filters::FilterEstimate& own,
+                                                  const CommonLandmarks& common, const TransformEstimate& held) const;
+  // Whether the own history can take part in a joint estimate: joint_transform on, the history
+  // whole, and landmark kinematics it models (static or known candidates, not a constant turn rate).
+  bool JointPossible() const {
+    return scenario_.cooperation.joint_transform && history_usable_ &&
+           scenario_.filter.landmark_kinematics != common::LandmarkKinematics::kConstantTurnRate;
+  }
+  // The kinematics the joint estimate gives a mapped landmark: static, or the known candidate
+  // nearest to its (v, w); nothing for a landmark whose heading is not known yet or that is
+  // tracked with a constant turn rate.
+  std::optional<smoother::BatchSmoother::Kinematics> JointKinematics(const filters::MapLandmark& l) const;
+  // Keeps the step in the own history (while it is usable for the joint estimate).
+  void Record(const common::SensorStep& step, const filters::FilterEstimate& estimate);
+  // Whether an estimate made at step still refines the peer's current rendezvous event.
+  bool Refining(const PeerState& peer, std::uint32_t step) const;
+  // Holds t as the transform to peer, estimated at step (and as the event's, while refining).
+  void HoldTransform(PeerState* peer, const TransformEstimate& t, std::uint32_t step);
+  // The snapshot for peer: the transforms held (but the peer's own), and the map if with_map.
+  MapSnapshot MakeSnapshot(const std::string& peer, const filters::FilterEstimate& estimate, bool with_map) const;
+  void Reject() { ++rejected_; }
+
+  common::ScenarioOptions scenario_;
+  std::string robot_id_;
+  int self_index_ = -1;  // in the scenario (the provenance of the own landmarks)
+  double var_range_ = 0.0, var_bearing_ = 0.0;
+  std::map<std::string, PeerState> peers_;
+  std::vector<RendezvousEvent> rendezvous_;
+  std::uint32_t last_step_ = 0;  // of the last AfterStep
+  bool any_step_ = false;
+  int rejected_ = 0;
+  int moved_notices_ = 0;
+  int cooperative_updates_ = 0;
+  std::vector<FrameTransform> joint_estimates_;
+  // The own history for the joint estimate: every step from step 1, each landmark detection
+  // labelled by its track (unlabelled ones left out); usable while no step is missing, every
+  // scan came labelled and it is within max_history_steps.
+  common::Pose2 first_pose_;
+  std::vector<common::SensorStep> history_;
+  bool history_usable_ = true;
+};
+
+}  // namespace mrslam::robot_agent::cooperation

@@ -1,0 +1,83 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/se2.h"
+#include "common/sensor_types.h"
+#include "robot_agent/filters/slam_filter.h"
+
+// Plain forms of the peer-to-peer messages (the node converts them to and from DDS). Every
+// message names its sender, its recipient, the sender's step when it was sent and a sequence
+// number per (sender, recipient).
+namespace mrslam::robot_agent::cooperation {
+
+struct PeerHeader {
+  std::string sender;
+  std::string recipient;
+  std::uint32_t step = 0;
+  double time_s = 0.0;
+  std::uint32_t sequence = 0;
+};
+
+// The sender's detection of the recipient at header.step, with the sender's pose estimate.
+struct RelativeMeasurement {
+  PeerHeader header;
+  bool has_range = true;
+  double range_m = 0.0;
+  double bearing_rad = 0.0;   // the sender's bearing to the recipient
+  common::Pose2 sender_pose;  // in the sender's frame
+  Eigen::Matrix3d sender_covariance = Eigen::Matrix3d::Identity();
+};
+
+// A frame transform an agent holds: T(G_self <- G_peer) with its covariance.
+struct FrameTransform {
+  std::string peer;
+  std::uint32_t step = 0;  // when it was (last) estimated
+  common::Pose2 t_self_peer;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+};
+
+// The sender's map (confirmed landmarks, predicted to header.step) in the sender's frame, and
+// the transforms the sender holds to other frames (for chaining). At a rendezvous also the
+// sender's history for the joint estimate of the transform: its first pose in its own frame and
+// every step from step 1 to header.step (odometry and lidar scan; each landmark detection's
+// landmark_id is the sender's track label of it, unlabelled detections left out; no IMU).
+struct MapSnapshot {
+  PeerHeader header;
+  std::vector<filters::MapLandmark> landmarks;
+  std::vector<FrameTransform> known_transforms;
+  common::Pose2 first_pose;
+  std::vector<common::SensorStep> history;
+};
+
+// "Landmark moved": the sender saw one of its mapped landmarks move (paper B).
+struct LandmarkMovedNotice {
+  PeerHeader header;
+  std::uint32_t track_id = 0;
+  int landmark_id = -1;
+  Eigen::Vector2d position_in_sender = Eigen::Vector2d::Zero();
+};
+
+// What an agent sends after a step.
+struct PeerOutbox {
+  std::vector<RelativeMeasurement> measurements;
+  std::vector<MapSnapshot> maps;
+  std::vector<LandmarkMovedNotice> moved;
+};
+
+// What an agent received from its peers during the previous step.
+using PeerInbox = PeerOutbox;
+
+// A rendezvous as it appears in the estimate stream and the log.
+struct RendezvousEvent {
+  std::string peer;
+  std::uint32_t step = 0;  // the step of the encounter's first mutual detection
+  common::Pose2 t_self_peer;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+};
+
+}  // namespace mrslam::robot_agent::cooperation

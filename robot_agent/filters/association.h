@@ -1,0 +1,34 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/config/scenario_options.h"
+
+// Data association of one detection against one particle's landmarks (paper A's modification 2:
+// on the predicted measurements), by nearest neighbour under a gate.
+namespace mrslam::robot_agent::filters {
+
+enum class AssociationKind : std::uint8_t {
+  kMatched,  // within the gate of its nearest unused landmark: update it
+  kNew,      // beyond the new-landmark gate of every landmark: start a landmark
+  kIgnored,  // in between: too ambiguous to use either way
+};
+
+// The gates on the association distance d2 (a squared Mahalanobis distance, chi-square with 2
+// degrees of freedom, or paper A's squared Euclidean distance |[dr, db]|^2):
+//   Mahalanobis: match if d2 <= chi2_2(gate_probability), new if d2 > chi2_2(new_landmark_prob);
+//   Euclidean:   match if d2 <= euclidean_gate^2, new otherwise (the paper's rule).
+struct AssociationGates {
+  bool euclidean = false;
+  double match = 0.0;
+  double create = 0.0;
+
+  static AssociationGates FromOptions(const common::FilterOptions& options);
+  AssociationKind Classify(double d2) const;
+};
+
+// Index of the smallest d2[i] over i < count with used[i] == 0, or -1 if there is none.
+int NearestUnused(const double* d2, int count, const std::vector<std::uint8_t>& used);
+
+}  // namespace mrslam::robot_agent::filters

@@ -1,0 +1,108 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/config/scenario_options.h"
+#include "common/se2.h"
+#include "common/sensor_types.h"
+
+namespace mrslam::robot_agent::filters {
+
+enum class LandmarkMotionKind : std::uint8_t { kStatic = 0, kUnicycle = 1, kConstantTurnRate = 2 };
+
+// One landmark of an agent's map, in the agent's frame.
+struct MapLandmark {
+  std::uint32_t track_id = 0;                      // the filter's own identifier
+  int landmark_id = -1;                            // reported identity, -1 if unknown
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();  // x_m, y_m, heading_rad
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  double v_mps = 0.0;
+  double w_radps = 0.0;
+  LandmarkMotionKind motion = LandmarkMotionKind::kStatic;
+  bool moving = false;
+  bool tentative = false;
+  std::uint32_t last_seen_step = 0;
+  std::uint32_t first_seen_step = 0;  // its first sighting here (merged: the step of the merge)
+  // Provenance: the robot (scenario index) that first mapped the landmark and its track id
+  // there. Merged landmarks keep theirs, so a landmark coming back from a peer is recognized.
+  int origin_robot = -1;
+  std::uint32_t origin_track = 0;
+};
+
+// A mapped landmark the filter saw move (paper B's ELA test), for "landmark moved" notices.
+struct MovedLandmark {
+  std::uint32_t step = 0;
+  std::uint32_t track_id = 0;
+  int landmark_id = -1;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // where it was seen, own frame
+};
+
+// What a filter reports after each step.
+struct FilterEstimate {
+  std::uint32_t step = 0;
+  double time_s = 0.0;
+  common::Pose2 pose;  // in the agent's own frame
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  double effective_sample_size = 1.0;
+  int particles = 1;
+  std::vector<MapLandmark> landmarks;
+  // Whether the filter labels the detections (fastslam; not ekf, ekf_ela), and then per landmark
+  // detection of the step's scan, in the scan's order, the track its most probable hypothesis
+  // associated it with or created from it (0: none, e.g. ignored or invalid).
+  bool labels_detections = false;
+  std::vector<std::uint32_t> detection_tracks;
+};
+
+// A SLAM filter for one robot in its own frame: fastslam, ekf or ekf_ela. Pure: no DDS.
+class SlamFilter {
+ public:
+  virtual ~SlamFilter() = default;
+  // Predicts with the step's odometry or IMU and corrects with its lidar scan.
+  virtual void Process(const common::SensorStep& step) = 0;
+  virtual FilterEstimate Estimate() const = 0;
+
+  // Landmarks seen moving since the last call (filters that detect motion: ekf_ela); a filter
+  // that tracks moving landmarks instead reports none.
+  virtual std::vector<MovedLandmark> TakeMovedLandmarks() { return {}; }
+  // A peer's "landmark moved" notice, its position already in the own frame with covariance cov:
+  // a filter that keeps only static landmarks removes the mapped landmark it gates to. Returns
+  // true if one was removed.
+  virtual bool ApplyMovedNotice(const Eigen::Vector2d& /*position*/, const Eigen::Matrix2d& /*cov*/,
+                                double /*gate_probability*/) {
+    return false;
+  }
+
+  // Merges landmarks given in the agent's own frame (a peer's map after the frame transform,
+  // predicted to the filter's current step). In every hypothesis (particle), each incoming
+  // landmark is gated against the own landmarks (squared Mahalanobis distance of the positions
+  // under the sum of their covariances within the chi-square 2 dof quantile of gate_probability;
+  // reported identities decide when both carry one); matched landmarks are fused by rule
+  // (map_fusion.h), unmatched ones are added, except static ones within too_close_m of a static
+  // own landmark (MatchLandmarks' kTooClose), which are left out. Returns how many were added.
+  virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
+                             double gate_probability, double too_close_m) = 0;
+
+  // Cooperative localization: at the current step this robot detected, at (range_m,
+  // bearing_rad), a robot whose position in the own frame is N(position, covariance). A filter
+  // that supports it weighs its pose hypotheses by that measurement, unless its innovation at
+  // the estimate lies beyond the squared Mahalanobis distance gate (an outlier); returns whether
+  // it used it.
+  virtual bool ObserveKnownRobot(const Eigen::Vector2d& /*position*/, const Eigen::Matrix2d& /*covariance*/,
+                                 double /*range_m*/, double /*bearing_rad*/, double /*gate*/) {
+    return false;
+  }
+};
+
+// The robot's initial pose in its own frame G_i: inverse(frame_in_world) * initial_pose.
+common::Pose2 InitialPoseInOwnFrame(const common::RobotOptions& robot);
+
+// The index of the known kinematics nearest (v, w) (|dv| + |dw|; the first of equals), or -1
+// when there are none: which candidate a landmark reported with (v, w) follows.
+int NearestKnownKinematics(const std::vector<common::KnownKinematics>& candidates, double v_mps, double w_radps);
+
+}  // namespace mrslam::robot_agent::filters

@@ -1,0 +1,391 @@
+#include "robot_agent/smoother/batch_smoother.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "common/angles.h"
+#include "common/gaussian.h"
+#include "robot_agent/filters/landmark_ekf.h"
+#include "robot_agent/filters/slam_filter.h"
+
+namespace mrslam::robot_agent::smoother {
+namespace {
+
+using common::Pose2;
+using common::WrapAngle;
+
+// A variance used as a whitening divisor: zero (a noise-free model) becomes a stiff tiny one.
+double Sd(double var) { return std::sqrt(std::max(var, 1e-12)); }
+
+// a - b on poses, heading wrapped.
+Eigen::Vector3d Minus(const Pose2& a, const Pose2& b) {
+  return {a.x - b.x, a.y - b.y, WrapAngle(a.heading - b.heading)};
+}
+
+// The scenario's landmark kinematics by identity (the oracle's knowledge).
+std::map<int, BatchSmoother::Kinematics> OracleKinematics(const common::ScenarioOptions& options) {
+  if (options.landmark_field.enabled) {
+    throw std::invalid_argument("the reference knows listed landmarks only, not a landmark_field");
+  }
+  std::map<int, BatchSmoother::Kinematics> kinematics;
+  for (const auto& l : options.landmarks) {
+    BatchSmoother::Kinematics k;
+    if (l.motion.model == common::LandmarkMotionModel::kUnicycle) {
+      k = {false, l.motion.v_mps, l.motion.w_radps};
+    } else if (l.motion.model != common::LandmarkMotionModel::kStatic) {
+      throw std::invalid_argument("the reference knows static and unicycle landmarks only (landmark " +
+                                  std::to_string(l.id) + ")");
+    }
+    kinematics[l.id] = k;
+  }
+  return kinematics;
+}
+
+}  // namespace
+
+// Appends the rows of one whitened residual block: r (size n) and its Jacobian blocks
+// (n x 3 each, zeros kept: the pattern depends on the structure only) for the variables at the
+// given column offsets (-1: a known quantity, no column).
+struct BatchSmoother::Rows {
+  std::vector<Eigen::Triplet<double>> jacobian;
+  std::vector<double> residual;
+
+  void Add(const Eigen::VectorXd& r, const std::vector<std::pair<int, Eigen::MatrixXd>>& blocks) {
+    const int row = static_cast<int>(residual.size());
+    for (int i = 0; i < r.size(); ++i) residual.push_back(r(i));
+    for (const auto& [col, j] : blocks) {
+      if (col < 0) continue;
+      for (int i = 0; i < j.rows(); ++i) {
+        for (int c = 0; c < j.cols(); ++c) {
+          jacobian.emplace_back(row + i, col + c, j(i, c));
+        }
+      }
+    }
+  }
+};
+
+std::vector<BatchSmoother::RobotStart> BatchSmoother::Starts(const common::ScenarioOptions& options,
+                                                             const std::vector<int>& robot_indices,
+                                                             const std::vector<Pose2>& first_pose_guesses) {
+  if (robot_indices.empty() || first_pose_guesses.size() + 1 != robot_indices.size()) {
+    throw std::invalid_argument("the reference needs one first-pose guess per robot after the first");
+  }
+  std::vector<RobotStart> robots;
+  for (std::size_t r = 0; r < robot_indices.size(); ++r) {
+    const common::RobotOptions& robot = options.robots.at(robot_indices[r]);
+    robots.push_back({robot.id, r == 0 ? filters::InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]});
+  }
+  return robots;
+}
+
+BatchSmoother::BatchSmoother(const common::ScenarioOptions& options, int robot_index)
+    : BatchSmoother(options, std::vector<int>{robot_index}, {}, 0) {}
+
+BatchSmoother::BatchSmoother(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
+                             const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step)
+    : BatchSmoother(options, Starts(options, robot_indices, first_pose_guesses), OracleKinematics(options),
+                    robot_detections_from_step) {
+  replay_ = options.replay.enabled;
+}
+
+BatchSmoother::BatchSmoother(const common::ScenarioOptions& options, const std::vector<RobotStart>& robots,
+                             std::map<int, Kinematics> kinematics, int robot_detections_from_step)
+    : dt_s_(options.run.dt_s),
+      filter_(options.filter),
+      replay_(false),
+      robot_var_(options.noise.robot_process_var),
+      landmark_var_(options.noise.landmark_process_var),
+      var_r_(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
+      var_b_(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad),
+      robot_detections_from_step_(robot_detections_from_step),
+      kinematics_(std::move(kinematics)) {
+  if (robots.empty()) throw std::invalid_argument("the reference needs at least one robot");
+  for (const auto& robot : robots)
+    robots_.push_back({robot.id, {robot.first_pose}, filters::OdometryCalibration(options.filter), {}});
+}
+
+Pose2 BatchSmoother::StepLandmark(const Pose2& l, const Kinematics& k) const {
+  return k.is_static ? l : common::UnicycleStep(l, k.v_mps, k.w_radps, dt_s_);
+}
+
+void BatchSmoother::Add(const std::vector<common::SensorStep>& steps) {
+  if (steps.size() != robots_.size()) throw std::invalid_argument("the reference needs one step per robot");
+  const int t = static_cast<int>(robots_.front().path.size());
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    Robot& robot = robots_[r];
+    robot.motion.push_back(robot.calibration.Step(steps[r].odometry, steps[r].lidar.stamp.time_s, dt_s_));
+    robot.path.push_back(common::Compose(robot.path.back(), Increment(robot, t, robot.correction)));
+  }
+  for (auto& [id, chain] : chains_) {
+    if (!chain.kinematics.is_static) chain.states.push_back(StepLandmark(chain.states.back(), chain.kinematics));
+  }
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    for (const auto& d : steps[r].lidar.landmarks) AddLandmarkReading(static_cast<int>(r), t, d);
+    if (t < robot_detections_from_step_) continue;
+    for (const auto& d : steps[r].lidar.robots) {
+      for (std::size_t seen = 0; seen < robots_.size(); ++seen) {
+        if (seen != r && robots_[seen].id == d.seen_robot_id && std::isfinite(d.range_m) &&
+            std::isfinite(d.bearing_rad)) {
+          readings_.push_back({t, static_cast<int>(r), -1, static_cast<int>(seen), d.range_m, d.bearing_rad});
+        }
+      }
+    }
+  }
+}
+
+void BatchSmoother::AddLandmarkReading(int r, int t, const common::LandmarkDetection& d) {
+  if (d.landmark_id < 0) throw std::invalid_argument("the reference needs detections with identities");
+  const auto listed = kinematics_.find(d.landmark_id);
+  const bool known = listed != kinematics_.end() || replay_;
+  if (!known || !std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad)) return;
+  readings_.push_back({t, r, d.landmark_id, -1, d.range_m, d.bearing_rad});
+  const Eigen::Vector2d point = common::PointFromRangeBearing(robots_[r].path.back(), {d.range_m, d.bearing_rad});
+  auto [it, created] = chains_.try_emplace(d.landmark_id);
+  Chain& chain = it->second;
+  if (created) {
+    chain.first_step = t;
+    if (listed != kinematics_.end()) chain.kinematics = listed->second;
+    chain.states.push_back({point.x(), point.y(), 0.0});
+  } else if (chain.sightings == 1 && !chain.kinematics.is_static && t > chain.first_step) {
+    // Second sighting: the heading from the displacement since the first (the chord of the arc
+    // turns by w dt / 2 per step less than the heading at its end), then the chain again.
+    const int steps = t - chain.first_step;
+    const Pose2& first = chain.states.front();
+    const double chord = std::atan2(point.y() - first.y, point.x() - first.x);
+    Pose2 l{first.x, first.y, WrapAngle(chord - 0.5 * chain.kinematics.w_radps * dt_s_ * (steps + 1))};
+    for (auto& state : chain.states) {
+      state = l;
+      l = StepLandmark(l, chain.kinematics);
+    }
+  }
+  ++chain.sightings;
+}
+
+void BatchSmoother::Solve() {
+  SolveOnce();
+  for (int round = 0; round < 10 && UpdateInliers(); ++round) SolveOnce();
+}
+
+// The index of a landmark's state at step t.
+int BatchSmoother::StateIndex(const Chain& chain, int t) {
+  return chain.kinematics.is_static ? 0 : t - chain.first_step;
+}
+
+Eigen::Vector2d BatchSmoother::Target(const Reading& z) const {
+  if (z.landmark_id < 0) return robots_[z.seen].path[z.step].Translation();
+  const Chain& chain = chains_.at(z.landmark_id);
+  return chain.states[StateIndex(chain, z.step)].Translation();
+}
+
+Eigen::Vector2d BatchSmoother::WhitenedResidual(const Reading& z) const {
+  const common::RangeBearing h = common::MeasureRangeBearing(robots_[z.robot].path[z.step], Target(z));
+  return {(z.range_m - h.range_m) / Sd(var_r_), WrapAngle(z.bearing_rad - h.bearing_rad) / Sd(var_b_)};
+}
+
+bool BatchSmoother::UpdateInliers() {
+  if (filter_.outlier_gate_probability >= 1.0) return false;
+  const double gate = common::ChiSquare2Quantile(filter_.outlier_gate_probability);
+  bool changed = false;
+  for (Reading& z : readings_) {
+    const bool inlier = WhitenedResidual(z).squaredNorm() <= gate;
+    changed = changed || inlier != z.inlier;
+    z.inlier = inlier;
+  }
+  return changed;
+}
+
+Pose2 BatchSmoother::Increment(const Robot& robot, int t, const Eigen::Vector3d& correction) {
+  Pose2 out;
+  for (const auto& m : robot.motion[t - 1]) {
+    out = common::UnicycleStep(out, correction(0) * m.v_mps, correction(1) * m.w_radps + correction(2), m.dt_s);
+  }
+  return out;
+}
+
+BatchSmoother::Layout BatchSmoother::MakeLayout() const {
+  Layout layout;
+  layout.steps = static_cast<int>(robots_.front().path.size()) - 1;
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    layout.robot_base.push_back(layout.cols);
+    layout.cols += 3 * (r == 0 ? layout.steps : layout.steps + 1);
+  }
+  for (const auto& [id, chain] : chains_) {
+    layout.chain_col[id] = layout.cols;
+    layout.cols += 3 * static_cast<int>(chain.states.size());
+  }
+  if (estimate_calibration_) {
+    layout.correction_base = layout.cols;
+    layout.cols += 3 * static_cast<int>(robots_.size());
+  }
+  return layout;
+}
+
+int BatchSmoother::Layout::RobotCol(int r, int t) const {
+  if (r == 0) return t == 0 ? -1 : robot_base[0] + 3 * (t - 1);
+  return robot_base[r] + 3 * t;
+}
+
+void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
+  const Eigen::Vector3d correction_prior(1.0, 1.0, 0.0);
+  const Eigen::Vector3d correction_w(1.0 / 0.1, 1.0 / 0.1, 1.0 / 0.05);
+  const Eigen::Vector3d robot_w = robot_var_.unaryExpr(&Sd).cwiseInverse();
+  const Eigen::Vector3d landmark_w = landmark_var_.unaryExpr(&Sd).cwiseInverse();
+  const Eigen::Vector2d z_w(1.0 / Sd(var_r_), 1.0 / Sd(var_b_));
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    const Robot& robot = robots_[r];
+    const int ri = static_cast<int>(r);
+    for (int t = 1; t <= layout.steps; ++t) {
+      const Pose2 increment = Increment(robot, t, robot.correction);
+      const Pose2& previous = robot.path[t - 1];
+      const Eigen::Vector3d res = robot_w.asDiagonal() * Minus(robot.path[t], common::Compose(previous, increment));
+      const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
+      // d increment / d correction by central differences; then through the composition.
+      Eigen::Matrix3d jc = Eigen::Matrix3d::Zero();
+      if (estimate_calibration_) {
+        constexpr double kH = 1e-6;
+        for (int c = 0; c < 3; ++c) {
+          Eigen::Vector3d d = Eigen::Vector3d::Zero();
+          d(c) = kH;
+          jc.col(c) =
+              Minus(Increment(robot, t, robot.correction + d), Increment(robot, t, robot.correction - d)) / (2.0 * kH);
+        }
+        jc = -(robot_w.asDiagonal() * common::ComposeJacobianRight(previous, increment) * jc);
+      }
+      rows->Add(res, {{layout.RobotCol(ri, t), Eigen::MatrixXd(robot_w.asDiagonal())},
+                      {layout.RobotCol(ri, t - 1), jf},
+                      {layout.CorrectionCol(ri), jc}});
+    }
+    if (estimate_calibration_) {
+      rows->Add(correction_w.asDiagonal() * (correction_prior - robot.correction),
+                {{layout.CorrectionCol(ri), -Eigen::MatrixXd(correction_w.asDiagonal())}});
+    }
+  }
+  for (const auto& [id, chain] : chains_) {
+    const int base = layout.chain_col.at(id);
+    // A weak prior on the first heading keeps it defined before it is observable.
+    Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(1, 3);
+    prior(0, 2) = 1e-3;
+    rows->Add(Eigen::VectorXd::Zero(1), {{base, prior}});
+    // A unicycle step is a composition with a fixed increment (a static landmark has one state).
+    const Pose2 increment = StepLandmark(Pose2{}, chain.kinematics);
+    const Eigen::Vector3d& w = landmark_w;
+    for (std::size_t i = 1; i < chain.states.size(); ++i) {
+      const Pose2& previous = chain.states[i - 1];
+      const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], common::Compose(previous, increment));
+      const Eigen::Matrix3d jf = -(w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
+      const int col = base + 3 * static_cast<int>(i);
+      rows->Add(res, {{col, Eigen::MatrixXd(w.asDiagonal())}, {col - 3, jf}});
+    }
+  }
+  for (const Reading& z : readings_) {
+    if (!z.inlier) continue;
+    const Pose2& x = robots_[z.robot].path[z.step];
+    const Eigen::Vector2d p = Target(z);
+    const int target_col = z.landmark_id >= 0
+                               ? layout.chain_col.at(z.landmark_id) + 3 * StateIndex(chains_.at(z.landmark_id), z.step)
+                               : layout.RobotCol(z.seen, z.step);
+    const Eigen::Vector2d res = WhitenedResidual(z);
+    // Jacobians of the residual (z - h): -dh.
+    const Eigen::MatrixXd jx = -filters::MeasurementJacobianPose(p, x);
+    Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, 3);
+    jp.leftCols<2>() = -filters::MeasurementJacobianLandmark(p, x);
+    rows->Add(res, {{layout.RobotCol(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
+  }
+}
+
+Eigen::SparseMatrix<double> BatchSmoother::Jacobian(const Layout& layout, Rows* rows) const {
+  BuildRows(layout, rows);
+  Eigen::SparseMatrix<double> j(static_cast<int>(rows->residual.size()), layout.cols);
+  j.setFromTriplets(rows->jacobian.begin(), rows->jacobian.end());
+  return j;
+}
+
+void BatchSmoother::SolveOnce() {
+  const Layout layout = MakeLayout();
+  const int cols = layout.cols;
+  auto cost = [](const Rows& rows) {
+    double c = 0.0;
+    for (const double r : rows.residual) c += r * r;
+    return c;
+  };
+  auto apply = [&](const Eigen::VectorXd& delta, double sign) {
+    for (std::size_t r = 0; r < robots_.size(); ++r) {
+      for (int t = r == 0 ? 1 : 0; t <= layout.steps; ++t) {
+        Pose2& x = robots_[r].path[t];
+        x = Pose2::FromVector(x.Vector() + sign * delta.segment<3>(layout.RobotCol(static_cast<int>(r), t)));
+      }
+    }
+    for (auto& [id, chain] : chains_) {
+      for (std::size_t i = 0; i < chain.states.size(); ++i) {
+        const int col = layout.chain_col.at(id) + 3 * static_cast<int>(i);
+        chain.states[i] = Pose2::FromVector(chain.states[i].Vector() + sign * delta.segment<3>(col));
+      }
+    }
+    for (std::size_t r = 0; r < robots_.size() && estimate_calibration_; ++r) {
+      robots_[r].correction += sign * delta.segment<3>(layout.CorrectionCol(static_cast<int>(r)));
+    }
+  };
+  double lambda = 1e-6;
+  // The pattern of H is the same at every iteration (Rows keeps structural zeros): its ordering
+  // and symbolic factorization are computed once.
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    Rows rows;
+    const Eigen::SparseMatrix<double> j = Jacobian(layout, &rows);
+    const double before = cost(rows);
+    const Eigen::Map<const Eigen::VectorXd> r(rows.residual.data(), static_cast<int>(rows.residual.size()));
+    Eigen::SparseMatrix<double> h = j.transpose() * j;
+    const Eigen::VectorXd g = j.transpose() * r;
+    Eigen::VectorXd diag = h.diagonal();
+    for (int c = 0; c < cols; ++c) h.coeffRef(c, c) += lambda * std::max(diag(c), 1e-9);
+    if (iteration == 0) solver.analyzePattern(h);
+    solver.factorize(h);
+    // The residual is z - h(.) style (r = target - model), so the step solves H d = -J^T r.
+    const Eigen::VectorXd delta = solver.solve(-g);
+    if (solver.info() != Eigen::Success || !delta.allFinite()) break;
+    apply(delta, 1.0);
+    Rows after_rows;
+    BuildRows(layout, &after_rows);
+    const double after = cost(after_rows);
+    if (after > before) {
+      apply(delta, -1.0);
+      lambda *= 10.0;
+      if (lambda > 1e6) break;
+      continue;
+    }
+    lambda = std::max(lambda / 10.0, 1e-9);
+    if (delta.cwiseAbs().maxCoeff() < 1e-7) break;
+  }
+}
+
+Eigen::Matrix3d BatchSmoother::FirstPoseCovariance(int r) const {
+  if (r < 1 || r >= static_cast<int>(robots_.size())) throw std::out_of_range("no robot placed by the data there");
+  // The block of (J^T J)^-1 at the current solution.
+  const Layout layout = MakeLayout();
+  Rows rows;
+  const Eigen::SparseMatrix<double> j = Jacobian(layout, &rows);
+  const Eigen::SparseMatrix<double> h = j.transpose() * j;
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(h);
+  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, 3);
+  const int col = layout.RobotCol(r, 0);
+  e.block<3, 3>(col, 0).setIdentity();
+  const Eigen::MatrixXd x = information.solve(e);
+  const bool ok = information.info() == Eigen::Success && x.allFinite();
+  return ok ? Eigen::Matrix3d(x.block<3, 3>(col, 0))
+            : Eigen::Matrix3d::Constant(std::numeric_limits<double>::infinity());
+}
+
+std::vector<std::pair<Eigen::Vector2d, int>> BatchSmoother::Landmarks() const {
+  std::vector<std::pair<Eigen::Vector2d, int>> out;
+  for (const auto& [id, chain] : chains_) out.emplace_back(chain.states.back().Translation(), id);
+  return out;
+}
+
+}  // namespace mrslam::robot_agent::smoother

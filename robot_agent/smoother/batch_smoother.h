@@ -1,0 +1,174 @@
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "common/config/scenario_options.h"
+#include "common/se2.h"
+#include "common/sensor_types.h"
+#include "robot_agent/filters/odometry_calibration.h"
+
+namespace mrslam::robot_agent::smoother {
+
+// The maximum a posteriori estimate of several robots' paths and of their landmarks' paths from
+// their odometry and readings, two uses:
+// * the approximately ideal estimator against which the agents are judged (mrslam_batch
+//   --reference, mrslam_batch --transform-reference), with the scenario's oracle knowledge;
+// * an agent's joint estimate of the transform to a peer at a rendezvous (cooperation.h), from
+//   both robots' histories, each reading labelled by the filter's association and each
+//   landmark's kinematics the filter's.
+// As the reference: at every step, the maximum a posteriori
+// estimate of the whole path so far of one robot, or of several robots at once, and of every
+// seen landmark's path, from all their odometry and detections so far, with oracle knowledge a
+// filter does not have: which landmark each detection is (the detections must carry identities)
+// and each landmark's true kinematics (static or unicycle with its (v, w)). The models are the
+// simulator's: x_t = f(x_{t-1}, u_t) + N(0, diag(noise.robot_process_var)),
+// l_t = f(l_{t-1}; v, w) + N(0, diag(noise.landmark_process_var)) (static: l_t = l_{t-1}),
+// z = (|p - x|, atan2(p - x) - heading) + N(0, diag(sd_r^2, sd_b^2)) for a landmark or robot at
+// p, f the unicycle step. The first robot's first pose is known and anchors the frame (its own
+// frame G_i); the first poses of the others in it are unknowns without a prior, so what places
+// them is only what the data say (common landmarks, detections of each other). Solved by
+// Gauss-Newton with Levenberg damping on the sparse normal equations, warm-started from the
+// previous step's solution. A landmark's heading is started at its second sighting from the
+// displacement between the two sightings. The odometry is calibrated as the filters calibrate it
+// (filter.odometry_scale, odometry_turn_scale, odometry_lag_s; OdometryCalibration); a replayed
+// data set's landmarks are static. With filter.outlier_gate_probability < 1, a reading whose
+// whitened residual at the solution lies beyond that chi-square (2 dof) gate is left out and the
+// problem solved again until the set of such readings stays the same (at most 10 rounds), as
+// the filters ignore such readings. Add and Solve apart turn it into a smoother of a whole run
+// (Path: every pose). EstimateOdometryCalibration: per robot three more unknowns, a speed
+// factor s_v, a turn-rate factor s_w and a turn-rate bias b_w, the motion being the calibrated
+// odometry's (s_v v, s_w w + b_w), with priors N(1, 0.1^2), N(1, 0.1^2), N(0, (0.05 rad/s)^2):
+// a model of a real robot's systematic odometry errors that the fixed calibration leaves.
+// Pure; not thread-safe.
+class BatchSmoother {
+ public:
+  struct Kinematics {
+    bool is_static = true;
+    double v_mps = 0.0, w_radps = 0.0;
+  };
+  // A robot of the set: its scenario id (robot detections name it) and its first pose in the
+  // frame (the first robot's anchors the frame; the others' are starting guesses).
+  struct RobotStart {
+    std::string id;
+    common::Pose2 first_pose;
+  };
+
+  // One robot, in its own frame. Throws std::invalid_argument for landmark models other than
+  // static and unicycle, or a landmark_field.
+  BatchSmoother(const common::ScenarioOptions& options, int robot_index);
+  // Several robots (scenario indices; the first anchors the frame). first_pose_guesses: one per
+  // further robot, its first pose in the first robot's frame to start the solver from (any
+  // guess within the solver's reach: only the data decide the result). Detections of each other
+  // count from step robot_detections_from_step on.
+  BatchSmoother(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
+                const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step);
+  // The robots of the set as the oracle constructors start them: the first at its known first
+  // pose in its own frame, the others from first_pose_guesses (one per further robot).
+  static std::vector<RobotStart> Starts(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
+                                        const std::vector<common::Pose2>& first_pose_guesses);
+  // Without oracle knowledge: the readings' landmark_id fields are labels chosen by the caller,
+  // each landmark's kinematics is given by label (a reading of a label not listed is left out),
+  // and the robots' first poses are given. options supply the step, the noise models and the
+  // odometry calibration only.
+  BatchSmoother(const common::ScenarioOptions& options, const std::vector<RobotStart>& robots,
+                std::map<int, Kinematics> kinematics, int robot_detections_from_step);
+
+  // One sensor step per robot of the set, in the set's order, then Solve.
+  void Process(const std::vector<common::SensorStep>& steps) {
+    Add(steps);
+    Solve();
+  }
+  void Process(const common::SensorStep& step) { Process(std::vector<common::SensorStep>{step}); }
+  // One sensor step per robot without solving: the new poses follow the odometry from the last
+  // ones, a new landmark is placed from its first reading.
+  void Add(const std::vector<common::SensorStep>& steps);
+  // The MAP estimate of everything added so far (warm-started from the current one).
+  void Solve();
+  // Estimates each robot's odometry factors and turn-rate bias too (call before Add).
+  void EstimateOdometryCalibration() { estimate_calibration_ = true; }
+  // Robot r's (s_v, s_w, b_w): (1, 1, 0) unless estimated.
+  const Eigen::Vector3d& OdometryCorrection(int r) const { return robots_.at(r).correction; }
+  // Robot r of the set (0: the first): its current pose and its first pose, in the frame.
+  const common::Pose2& Pose(int r = 0) const { return robots_.at(r).path.back(); }
+  const common::Pose2& FirstPose(int r) const { return robots_.at(r).path.front(); }
+  // Robot r's (r >= 1) first-pose covariance at the current solution: the block of the inverse
+  // of the Gauss-Newton information J^T J (the Laplace approximation of the posterior),
+  // computed when asked.
+  Eigen::Matrix3d FirstPoseCovariance(int r) const;
+  // Robot r's every pose, from its first (step 0) to the last step added.
+  const std::vector<common::Pose2>& Path(int r) const { return robots_.at(r).path; }
+  // The current position of every landmark seen so far, with its identity.
+  std::vector<std::pair<Eigen::Vector2d, int>> Landmarks() const;
+
+ private:
+  struct Chain {  // one landmark's states from its first sighting on (static: one state)
+    int first_step = 0;
+    Kinematics kinematics;
+    std::vector<common::Pose2> states;
+    int sightings = 0;
+  };
+  struct Robot {
+    std::string id;
+    std::vector<common::Pose2> path;  // path[0]: the first pose
+    filters::OdometryCalibration calibration;
+    // motion[t - 1]: step t's calibrated odometry segments.
+    std::vector<std::vector<filters::OdometryCalibration::Motion>> motion;
+    Eigen::Vector3d correction{1.0, 1.0, 0.0};  // (s_v, s_w, b_w)
+  };
+  // Step t's motion in the robot's frame under `correction`: x_t = Compose(x_{t-1}, increment)
+  // (a unicycle step is one), the corrected segments composed.
+  static common::Pose2 Increment(const Robot& robot, int t, const Eigen::Vector3d& correction);
+  struct Reading {
+    int step = 0, robot = 0;  // who read it, when
+    int landmark_id = -1;     // a landmark, or -1: robot `seen` of the set
+    int seen = -1;
+    double range_m = 0.0, bearing_rad = 0.0;
+    bool inlier = true;  // within the outlier gate at the last solution
+  };
+
+  common::Pose2 StepLandmark(const common::Pose2& l, const Kinematics& k) const;
+  void AddLandmarkReading(int r, int t, const common::LandmarkDetection& d);
+  static int StateIndex(const Chain& chain, int t);  // of a landmark's state at step t
+  // Gauss-Newton with Levenberg damping over the inlying readings.
+  void SolveOnce();
+  // The unknowns' columns: every robot's poses (the first robot's from step 1, the others' from
+  // their first pose), then every chain's states in id order, then (if estimated) every robot's
+  // correction.
+  struct Layout {
+    int steps = 0, cols = 0, correction_base = -1;
+    std::vector<int> robot_base;
+    std::map<int, int> chain_col;      // by landmark id
+    int RobotCol(int r, int t) const;  // -1: the first robot's first pose, known
+    int CorrectionCol(int r) const { return correction_base < 0 ? -1 : correction_base + 3 * r; }
+  };
+  Layout MakeLayout() const;
+  // The whitened residual rows of every factor at the current estimate, and their Jacobian.
+  struct Rows;
+  void BuildRows(const Layout& layout, Rows* rows) const;
+  Eigen::SparseMatrix<double> Jacobian(const Layout& layout, Rows* rows) const;
+  // A reading's target (landmark or robot position) and its residual z - h, whitened, at the
+  // current solution.
+  Eigen::Vector2d Target(const Reading& z) const;
+  Eigen::Vector2d WhitenedResidual(const Reading& z) const;
+  // Marks the readings within the outlier gate at the current solution; true if any changed.
+  bool UpdateInliers();
+
+  double dt_s_;
+  common::FilterOptions filter_;  // the odometry calibration and the outlier gate
+  bool replay_;                   // a data set's landmarks (all static)
+  bool estimate_calibration_ = false;
+  Eigen::Vector3d robot_var_, landmark_var_;
+  double var_r_, var_b_;
+  int robot_detections_from_step_;
+  std::map<int, Kinematics> kinematics_;  // by landmark id
+  std::vector<Robot> robots_;
+  std::map<int, Chain> chains_;
+  std::vector<Reading> readings_;
+};
+
+}  // namespace mrslam::robot_agent::smoother
