@@ -4,8 +4,8 @@
 // For every filter, dynamism (landmark_field.moving_fraction), speed (landmark_field.speed_mps)
 // and run (seed 1..N) it runs the scenario for the given frames and writes one row to
 // OUT/grid.csv, then OUT/tables.md (paper B's layout: rows dynamism, columns speed; means over
-// the runs) with the ratio ekf_ela / ekf and the issue's targets. Metrics, per robot in its own
-// frame, then averaged over the robots:
+// the runs) with the ratio ekf_ela / ekf and how often ekf_ela meets its targets against ekf. Metrics, per robot in its
+// own frame, then averaged over the robots:
 //   landmark RMSE (paper B's eqs. 17-18): at frame k, RMSE_k = sqrt(mean_i |m_i - l_i(k)|^2)
 //     over the landmarks in the robot's map at k (reported, not tentative: a landmark the filter
 //     holds as moving is not part of its map), each against the true position at frame k of the
@@ -487,7 +487,7 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
   }
   const int total = static_cast<int>(kDynamism.size() * kSpeeds.size());
   const int at_least = total - total / 10;  // 27 of 30
-  out << "## Targets (issue 6), on the means above\n\n";
+  out << "## ekf_ela against ekf (targets), on the means above\n\n";
   out << "- ekf_ela better than ekf on landmark RMSE: " << lm_better << "/" << total << " cells (target " << total
       << ")\n";
   out << "- ekf_ela better than ekf on robot RMSE: " << robot_better << "/" << total << " cells (target >= " << at_least
