@@ -4,11 +4,21 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 
+#include "common/config/scenario_keys.h"
+
 namespace mrslam::common {
 namespace {
+
+// While ScenarioKeys runs: every key path the parser looks up (sequence indices as "[]").
+thread_local std::set<std::string>* keys_looked_up = nullptr;
+
+void NoteKeyLookup(const std::string& path) {
+  if (keys_looked_up != nullptr) keys_looked_up->insert(std::regex_replace(path, std::regex(R"(\.[0-9]+)"), "[]"));
+}
 
 // A YAML mapping being read: remembers which keys were used so that the rest can be reported
 // as unknown, and names every key by its full path in errors.
@@ -25,6 +35,7 @@ class Section {
 
   bool Has(const std::string& key) {
     used_.insert(key);
+    NoteKeyLookup(KeyPath(key));
     return node_ && node_.IsMap() && node_[key] && !node_[key].IsNull();
   }
   std::string KeyPath(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
@@ -40,6 +51,7 @@ class Section {
   }
   YAML::Node Raw(const std::string& key) {
     used_.insert(key);
+    NoteKeyLookup(KeyPath(key));
     return node_ ? node_[key] : YAML::Node();
   }
   Pose2 GetPose(const std::string& key, const Pose2& fallback) {
@@ -720,6 +732,25 @@ ScenarioOptions LoadScenario(const std::string& path, const std::vector<std::str
   std::string error;
   if (!options.IsValid(&error)) throw ScenarioError(error);
   return options;
+}
+
+std::set<std::string> ScenarioKeys(const std::vector<YAML::Node>& documents) {
+  std::set<std::string> looked_up;
+  struct Collecting {  // stops collecting however parsing ends
+    explicit Collecting(std::set<std::string>* keys) { keys_looked_up = keys; }
+    ~Collecting() { keys_looked_up = nullptr; }
+    Collecting(const Collecting&) = delete;
+    Collecting& operator=(const Collecting&) = delete;
+  } collecting(&looked_up);
+  for (const auto& document : documents) CreateScenarioOptions(document);
+  std::set<std::string> leaves;
+  for (const auto& key : looked_up) {
+    const auto next = looked_up.upper_bound(key);
+    const bool has_children = next != looked_up.end() && next->rfind(key, 0) == 0 && (next->size() > key.size()) &&
+                              ((*next)[key.size()] == '.' || (*next)[key.size()] == '[');
+    if (!has_children) leaves.insert(key);
+  }
+  return leaves;
 }
 
 }  // namespace mrslam::common
