@@ -72,7 +72,7 @@ inline Eigen::Vector2d PointFromRangeBearing(const Pose2& pose, const RangeBeari
   return {pose.x + z.range_m * std::cos(a), pose.y + z.range_m * std::sin(a)};
 }
 
-// The unicycle step of DESIGN.md: x += v dt cos(phi + w dt), y += v dt sin(phi + w dt),
+// The unicycle step of docs/models.md: x += v dt cos(phi + w dt), y += v dt sin(phi + w dt),
 // phi += w dt.
 inline Pose2 UnicycleStep(const Pose2& p, double v_mps, double w_radps, double dt_s) {
   const double h = p.heading + w_radps * dt_s;

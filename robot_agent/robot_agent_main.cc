@@ -1,4 +1,4 @@
-// robot_agent: one robot's SLAM filter in its own process and frame (see README).
+// robot_agent: one robot's SLAM filter in its own process and frame (docs/design.md).
 #include <spdlog/spdlog.h>
 
 #include "common/app.h"

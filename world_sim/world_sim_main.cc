@@ -1,5 +1,5 @@
 // world_sim: steps a scenario's world and publishes every robot's sensors and the ground truth
-// over DDS (see README: topics and lockstep protocol).
+// over DDS (see docs/dds.md: topics and lockstep).
 #include <sstream>
 
 #include <spdlog/spdlog.h>

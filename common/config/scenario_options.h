@@ -203,7 +203,7 @@ struct RendezvousOptions {
   int min_interval_steps = 20;  // between repeated rendezvous of one pair
 };
 
-// How an agent fuses a peer's landmark with its own matched landmark (README "cooperation").
+// How an agent fuses a peer's landmark with its own matched landmark (docs/cooperation.md).
 enum class MapFusionRule { kCovarianceIntersection, kWeighted, kAverage };
 
 // Cooperation among robots: frame transforms from mutual detections, map snapshots and their
@@ -239,7 +239,7 @@ struct CooperationOptions {
 // may be smaller: the first steps of the window).
 struct ReplayOptions {
   bool enabled = false;
-  std::string dir;                  // data folder; LoadScenario resolves a relative one (README)
+  std::string dir;                  // data folder; LoadScenario resolves a relative one (docs/scenario-schema.md)
   double step_s = 0.1;              // one replay step
   double start_s = 0.0;             // window start, seconds after the data set's first time stamp
   double duration_s = 0.0;          // window length (required)

@@ -186,7 +186,7 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   std::deque<Msg> queue_;
 };
 
-// Topic names (DESIGN.md).
+// Topic names (docs/dds.md).
 std::string LidarTopic(const std::string& robot_id);
 std::string ImuTopic(const std::string& robot_id);
 std::string OdometryTopic(const std::string& robot_id);

@@ -10,7 +10,7 @@
 #include "common/gaussian.h"
 #include "robot_agent/filters/map_fusion.h"
 
-// How an agent cooperates (the protocol; README "Cooperation"):
+// How an agent cooperates (the protocol; docs/cooperation.md):
 //
 //  * Detection. Every robot detection in the own scan at step k >= rendezvous.enable_from_step
 //    is sent to the seen robot as a RelativeMeasurement (range, bearing, the own pose estimate

@@ -43,7 +43,7 @@ class Cooperation {
 
   // Whether an estimate made at step still refines the rendezvous of an encounter that began at
   // encounter_first: its transform is refined over the encounter's first kEncounterRefineSteps
-  // steps (DESIGN.md scores it after them), then held as it is in rendezvous().
+  // steps (docs/metrics.md: scored after them), then held as it is in rendezvous().
   static bool WithinRefinement(std::uint32_t encounter_first, std::uint32_t step) {
     return step <= encounter_first + kEncounterRefineSteps;
   }

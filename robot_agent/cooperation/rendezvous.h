@@ -7,7 +7,7 @@
 
 #include "common/se2.h"
 
-// The maths of a rendezvous (DESIGN.md "Frames and models", Zhou & Roumeliotis 2006): the
+// The maths of a rendezvous (docs/design.md "Frames", docs/cooperation.md; Zhou & Roumeliotis 2006): the
 // transform between two robots' frames from their mutual range-bearing detections and their
 // pose estimates, with its covariance; the composition of transforms (chaining through a peer);
 // the fusion of repeated estimates of one transform; and its refinement by the landmarks both
@@ -36,7 +36,7 @@ struct TransformEstimate {
   Eigen::Matrix3d Covariance() const { return dependent + independent; }
 };
 
-// Robot j's pose in robot i's body frame from a mutual detection (DESIGN.md):
+// Robot j's pose in robot i's body frame from a mutual detection (docs/cooperation.md):
 //   rho = (range_ij + range_ji) / 2,
 //   T(R_i <- R_j) = (rho cos b_ij, rho sin b_ij, pi + b_ij - b_ji),
 // and its Jacobian with respect to z = (range_ij, bearing_ij, range_ji, bearing_ji):

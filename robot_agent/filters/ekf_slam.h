@@ -24,7 +24,7 @@ namespace mrslam::robot_agent::filters {
 // in the agent's own frame; for ekf_ela some of the m are on probation (found moving, see 6).
 //
 // One step (Process):
-//  1. Prediction per odometry segment (v, w, dt), the unicycle of DESIGN.md:
+//  1. Prediction per odometry segment (v, w, dt), the unicycle of docs/models.md:
 //       f(R) = (x + v dt cos(phi + w dt), y + v dt sin(phi + w dt), phi + w dt),
 //       F = df/dR, G = df/d(v, w); P_RR = F P_RR F^T + G diag(sd_v^2, sd_w^2) G^T,
 //       P_RM = F P_RM; after the last segment P_RR += diag(noise.robot_process_var).

@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 
 // Paper B's "expected landmark area" (ELA) test (Badalkhani & Havangi 2021, section 3.3, with
-// the reading of papers/NOTES.md): which of the mapped landmarks observed in one frame moved?
+// the reading of docs/models.md): which of the mapped landmarks observed in one frame moved?
 namespace mrslam::robot_agent::filters {
 
 // One observation of a landmark in the joint EKF state: its slot (position at x(3 + 2 slot),

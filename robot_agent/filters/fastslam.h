@@ -18,7 +18,7 @@
 namespace mrslam::robot_agent::filters {
 
 // FastSLAM (a Rao-Blackwellized particle filter) among moving landmarks, after paper A's
-// Algorithm 1 with the fixes of NOTES.md. Each particle owns a robot pose in the agent's frame
+// Algorithm 1 with the fixes of docs/models.md. Each particle owns a robot pose in the agent's frame
 // and a map of landmark EKFs of state dimension D (2: static, 3: unicycle with known (v, w),
 // 5: constant turn rate), stored in copy-on-write blocks of kLanes landmarks.
 //

@@ -21,7 +21,7 @@
 //   static             D = 2: (x, y)
 //   unicycle, known v,w D = 3: (x, y, heading); (v, w) are parameters of the landmark
 //   constant turn rate D = 5: (x, y, heading, v, w), v and w estimated online
-// Motion (DESIGN.md): heading' = heading + w dt; x' = x + v dt cos(heading');
+// Motion (docs/models.md): heading' = heading + w dt; x' = x + v dt cos(heading');
 //                     y' = y + v dt sin(heading'); v' = v; w' = w; plus N(0, Q) per step.
 // Measurement from a robot pose (xr, yr, phi):
 //   r = sqrt(dx^2 + dy^2),  b = atan2(dy, dx) - phi,  dx = x - xr, dy = y - yr.

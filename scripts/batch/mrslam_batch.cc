@@ -1,6 +1,6 @@
 // mrslam_batch: the accuracy of each robot's own filter over many seeds, in-process (the World or
 // a data set's replay, and one filter per robot, no DDS). For every seed it runs the scenario to its end and computes
-// per robot (DESIGN.md's definitions, in the robot's own frame):
+// per robot (docs/metrics.md's definitions, in the robot's own frame):
 //   position RMSE (m) and heading RMSE (deg) over every step,
 //   landmark RMSE (m): root of the mean over every step and every landmark in the map of the
 //     squared error against the true landmark it stands for (LandmarkErrors),
@@ -10,7 +10,7 @@
 // filter (BatchSmoother: batch MAP with oracle association and kinematics) replaces each robot's
 // own filter, on the same data (the lidar reports identities; nothing else changes). With
 // --transform-reference it prints instead, per ordered pair of robots, the error of the transform
-// T(G_i <- G_j) at the end of their first encounter (DESIGN.md) as the joint MAP reference of
+// T(G_i <- G_j) at the end of their first encounter (docs/cooperation.md) as the joint MAP reference of
 // both robots holds it: the best that "everything both robots know" allows (with a
 // landmark_field, from its static landmarks: the movers' readings are left out). The JSON also
 // holds each met pair's transform per seed.

@@ -1,7 +1,7 @@
 // mrslam_launch: runs a scenario end to end as separate processes (evaluator, world_sim, one
 // robot_agent per robot) on a free DDS domain, supervises them, shows progress, and at the end
 // prints a summary table and writes plots. With --seeds A..B it runs each seed in turn and
-// aggregates (median, 90th percentile). See README: "Running a scenario".
+// aggregates (median, 90th percentile). See docs/executables.md.
 #include <unistd.h>
 
 #include <atomic>

@@ -124,7 +124,7 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
   ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + ".log");
   const std::string output = ReadFile(out + ".log");
 
-  // summary.json: every key of DESIGN.md, plausible values.
+  // summary.json: every key of docs/metrics.md, plausible values.
   nlohmann::json summary;
   ASSERT_NO_THROW(summary = nlohmann::json::parse(ReadFile(out + "/summary.json"))) << output;
   EXPECT_EQ(summary.value("scenario", ""), "paper_two_robots");

@@ -20,7 +20,7 @@ using testing::SourcePath;
 
 constexpr int kDomain = 130;  // this test's own DDS domains: 130..134
 
-// Bounds, from Dataset 6's first 60 s for r1-r3 (README "Real data"): dead reckoning alone
+// Bounds, from Dataset 6's first 60 s for r1-r3 (measured on the data; docs/real-data.md): dead reckoning alone
 // (true start, calibrated commands) stays within about 0.1-0.3 m RMSE, the camera's median
 // range error is 0.085 m and the landmarks are 1-8.6 m away. A replay that breaks the data
 // (barcode mapping, bearing sign, time base, frames, window) or a filter that diverges on

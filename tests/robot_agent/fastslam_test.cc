@@ -124,7 +124,7 @@ TEST(FastSlam, StaticMapConvergesToTheLandmarks) {
   }
 }
 
-// Paper A's world (NOTES.md): the robot on a circle among two unicycle landmarks whose
+// Paper A's world (docs/models.md): the robot on a circle among two unicycle landmarks whose
 // (v, w) are known as candidates, 6 m lidar, dt 0.65 s.
 common::ScenarioOptions PaperAScenario() {
   common::ScenarioOptions o = OneRobotScenario(1.0, 0.2, 500);

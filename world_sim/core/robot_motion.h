@@ -22,7 +22,7 @@ struct VelocityCommand {
 //             far |w| * t_s < sweep_rad (sweep_rad = 0: forever), then (0, 0).
 VelocityCommand CommandAt(const common::ControlOptions& control, double t_s);
 
-// The true robot motion over one step: the unicycle step of DESIGN.md with the command, then
+// The true robot motion over one step: the unicycle step of docs/models.md with the command, then
 // additive process noise n ~ N(0, diag(process_var)) on (x, y, heading), heading wrapped.
 common::Pose2 StepRobot(const common::Pose2& pose, const VelocityCommand& command, double dt_s,
                         const Eigen::Vector3d& process_var, common::Rng& rng);

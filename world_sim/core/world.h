@@ -24,7 +24,7 @@ std::vector<common::LandmarkOptions> ExpandLandmarks(const common::ScenarioOptio
 // scenario and a seed fix every sample. Pure: no DDS, no wall clock.
 //
 // Step k (k = 1..steps) moves every robot and landmark from time (k-1)*dt to k*dt with the
-// unicycle model of DESIGN.md plus process noise, then senses: odometry carries the command
+// unicycle model of docs/models.md plus process noise, then senses: odometry carries the command
 // applied during the step (plus odometry noise); the IMU the true rotation rate and body-frame
 // acceleration over the step (plus noise); the lidar every landmark and robot in range and
 // field of view at the new pose, in random order.

@@ -6,7 +6,7 @@
 
 #include "common/se2.h"
 
-// The metric functions of DESIGN.md, in one small library that the evaluator process, the batch
+// The metric functions of docs/metrics.md, in one small library that the evaluator process, the batch
 // tools and the tests share. Pure: no DDS. Errors of a robot are measured in its own frame G_i,
 // through the true frame pose (truth_in_G_i = inverse(frame_in_world) * truth_in_world).
 namespace mrslam::evaluator {

@@ -37,7 +37,7 @@ struct RobotEstimate {
 
 // Scores a run: collects the truth and every robot's estimates and odometry by step, then
 // computes the per-step metrics (errors in each robot's own frame, through the true frame
-// pose) and the run summary of DESIGN.md, and writes metrics.csv, summary.json, TUM
+// pose) and the run summary of docs/metrics.md, and writes metrics.csv, summary.json, TUM
 // trajectories and tracks.csv (everything in the first robot's frame, for plots). Pure: no DDS.
 class RunEvaluator {
  public:
