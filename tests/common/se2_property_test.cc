@@ -8,24 +8,19 @@
 #include "common/angles.h"
 #include "common/rng.h"
 #include "common/se2.h"
+#include "tests/test_matchers.h"
 
 // Property tests of the SE(2) and angle maths over many seeded random cases (Ceres'
 // manifold_test.cc style): each identity must hold for every sample.
 namespace mrslam::common {
 namespace {
 
+using mrslam::testing::IsNearlyPose;
+
 constexpr int kTrials = 2000;
 // Rounding of a few compositions of values of order 10: far above 1e-16 * 10, far below any
 // real error.
 constexpr double kTol = 1e-9;
-
-// Matches a pose within tol_m in position and tol_rad in (wrapped) heading.
-MATCHER_P3(IsNearlyPose, expected, tol_m, tol_rad, "") {
-  const double dh = WrapAngle(arg.heading - expected.heading);
-  *result_listener << "pose (" << arg.x << ", " << arg.y << ", " << arg.heading << ") vs (" << expected.x << ", "
-                   << expected.y << ", " << expected.heading << ")";
-  return std::abs(arg.x - expected.x) <= tol_m && std::abs(arg.y - expected.y) <= tol_m && std::abs(dh) <= tol_rad;
-}
 
 Pose2 RandomPose(Rng& rng) { return {rng.Uniform(-10.0, 10.0), rng.Uniform(-10.0, 10.0), rng.Uniform(-kPi, kPi)}; }
 Eigen::Vector2d RandomPoint(Rng& rng) { return {rng.Uniform(-10.0, 10.0), rng.Uniform(-10.0, 10.0)}; }

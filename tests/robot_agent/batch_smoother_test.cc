@@ -1,5 +1,4 @@
 #include "robot_agent/smoother/batch_smoother.h"
-#include "robot_agent/filters/filter_factory.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include "common/angles.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
+#include "robot_agent/filters/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "world_sim/source/step_source_factory.h"
 

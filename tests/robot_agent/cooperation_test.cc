@@ -1,5 +1,4 @@
 #include "robot_agent/cooperation/cooperation.h"
-#include "robot_agent/filters/filter_factory.h"
 
 #include <cmath>
 #include <functional>
@@ -20,11 +19,15 @@
 #include "common/rng.h"
 #include "robot_agent/cooperation/rendezvous.h"
 #include "robot_agent/filters/fastslam.h"
+#include "robot_agent/filters/filter_factory.h"
 #include "robot_agent/filters/map_fusion.h"
 #include "tests/robot_agent/tiny_world.h"
+#include "tests/test_matchers.h"
 
 namespace mrslam::robot_agent::cooperation {
 namespace {
+
+using mrslam::testing::IsNearlyPose;
 
 using common::Pose2;
 
@@ -44,12 +47,6 @@ Pose2 SamplePose(common::Rng* rng, const Pose2& mean, const Eigen::Matrix3d& cov
   const Eigen::LLT<Eigen::Matrix3d> llt(cov);
   const Eigen::Vector3d n(rng->Normal(), rng->Normal(), rng->Normal());
   return Pose2::FromVector(mean.Vector() + llt.matrixL() * n);
-}
-
-MATCHER_P2(IsNearlyPose, expected, tol, "") {
-  const Eigen::Vector3d e = PoseError(arg, expected);
-  *result_listener << "error (" << e.transpose() << ")";
-  return e.head<2>().norm() <= tol && std::abs(e.z()) <= tol;
 }
 
 // The true mutual detection between two robots given in one frame.
@@ -87,8 +84,8 @@ TEST(Rendezvous, RelativePoseOfBothSidesAreInverses) {
     const MutualDetection z = TrueMutual(c.robot_i, c.robot_j);
     const MutualDetection swapped{z.range_ji_m, z.bearing_ji_rad, z.range_ij_m, z.bearing_ij_rad, true};
     const Pose2 ij = RelativePoseFromMutual(z, nullptr), ji = RelativePoseFromMutual(swapped, nullptr);
-    EXPECT_THAT(common::Compose(ij, ji), IsNearlyPose(Pose2{}, 1e-9));
-    EXPECT_THAT(ij, IsNearlyPose(common::Between(c.robot_i, c.robot_j), 1e-9));
+    EXPECT_THAT(common::Compose(ij, ji), IsNearlyPose(Pose2{}, 1e-9, 1e-9));
+    EXPECT_THAT(ij, IsNearlyPose(common::Between(c.robot_i, c.robot_j), 1e-9, 1e-9));
   }
 }
 
@@ -99,7 +96,7 @@ TEST(Rendezvous, TransformIsExactWithoutNoise) {
     const RandomCase c = MakeCase(&rng);
     const TransformEstimate t =
         TransformFromMutual(c.PoseI(), p, c.PoseJ(), p, TrueMutual(c.robot_i, c.robot_j), 1e-4, 1e-4);
-    EXPECT_THAT(t.t, IsNearlyPose(c.Truth(), 1e-9));
+    EXPECT_THAT(t.t, IsNearlyPose(c.Truth(), 1e-9, 1e-9));
     EXPECT_TRUE(common::IsSymmetricPositiveDefinite<3>(t.Covariance()));
   }
 }
@@ -172,7 +169,7 @@ TEST(Rendezvous, BothSidesComputeInverseTransforms) {
     const MutualDetection swapped{z.range_ji_m, z.bearing_ji_rad, z.range_ij_m, z.bearing_ij_rad, true};
     const TransformEstimate ij = TransformFromMutual(est_i, pi, est_j, pj, z, 1e-3, 1e-3);
     const TransformEstimate ji = TransformFromMutual(est_j, pj, est_i, pi, swapped, 1e-3, 1e-3);
-    EXPECT_THAT(common::Compose(ij.t, ji.t), IsNearlyPose(Pose2{}, 1e-9));
+    EXPECT_THAT(common::Compose(ij.t, ji.t), IsNearlyPose(Pose2{}, 1e-9, 1e-9));
     const TransformEstimate inv = InvertTransform(ij);
     EXPECT_LT((inv.Covariance() - ji.Covariance()).norm(), 1e-9 * (1.0 + ji.Covariance().norm()));
   }
@@ -192,7 +189,7 @@ TEST(Rendezvous, ChainedTransformIsExactAndConsistent) {
     b.t = t_jk;
     b.independent = Eigen::Matrix3d::Identity() * 2e-3;
     const TransformEstimate exact = ChainTransforms(a, b);
-    EXPECT_THAT(exact.t, IsNearlyPose(common::Compose(common::Inverse(c.frame_i), frame_k), 1e-9));
+    EXPECT_THAT(exact.t, IsNearlyPose(common::Compose(common::Inverse(c.frame_i), frame_k), 1e-9, 1e-9));
     TransformEstimate na = a, nb = b;
     na.t = SamplePose(&rng, t_ij, a.Covariance());
     nb.t = SamplePose(&rng, t_jk, b.Covariance());
@@ -316,11 +313,11 @@ TEST(Alignment, ExactWithoutNoise) {
     c.prior.independent = Eigen::Vector3d(0.01, 0.01, 0.001).asDiagonal();
     const std::optional<TransformEstimate> aligned = AlignLandmarks(c.prior, c.pairs);
     ASSERT_TRUE(aligned.has_value());
-    EXPECT_THAT(aligned->t, IsNearlyPose(c.truth, 1e-6)) << "trial " << trial;
+    EXPECT_THAT(aligned->t, IsNearlyPose(c.truth, 1e-6, 1e-6)) << "trial " << trial;
     // One moving landmark with its heading fixes the transform on its own.
     const std::optional<TransformEstimate> one = AlignLandmarks(c.prior, {c.pairs[1]});
     ASSERT_TRUE(one.has_value());
-    EXPECT_THAT(one->t, IsNearlyPose(c.truth, 1e-6)) << "trial " << trial;
+    EXPECT_THAT(one->t, IsNearlyPose(c.truth, 1e-6, 1e-6)) << "trial " << trial;
   }
   TransformEstimate prior;
   prior.dependent = Eigen::Matrix3d::Identity();
@@ -400,7 +397,7 @@ TEST(Alignment, BothSidesGetInverseTransforms) {
     const std::optional<TransformEstimate> ab = AlignLandmarks(c.prior, c.pairs);
     const std::optional<TransformEstimate> ba = AlignLandmarks(InvertTransform(c.prior), swapped);
     ASSERT_TRUE(ab.has_value() && ba.has_value());
-    EXPECT_THAT(common::Compose(ab->t, ba->t), IsNearlyPose(Pose2{}, 0.01)) << "trial " << trial;
+    EXPECT_THAT(common::Compose(ab->t, ba->t), IsNearlyPose(Pose2{}, 0.01, 0.01)) << "trial " << trial;
   }
 }
 
@@ -613,13 +610,13 @@ TEST(Cooperation, TwoAgentsMeetAgreeAndMergeMaps) {
   EXPECT_EQ(sim.sent_maps, 2);
   const RendezvousEvent& e01 = sim.agent(0).rendezvous()[0];
   const RendezvousEvent& e10 = sim.agent(1).rendezvous()[0];
-  EXPECT_THAT(common::Compose(e01.t_self_peer, e10.t_self_peer), IsNearlyPose(Pose2{}, 0.01));
+  EXPECT_THAT(common::Compose(e01.t_self_peer, e10.t_self_peer), IsNearlyPose(Pose2{}, 0.01, 0.01));
   EXPECT_LT(Nees(e01.t_self_peer, sim.TrueTransform(0, 1), e01.covariance), 16.3);  // chi2(3) 0.999
   const std::optional<FrameTransform> t01 = Find(sim.agent(0).known_transforms(), "r2");
   const std::optional<FrameTransform> t10 = Find(sim.agent(1).known_transforms(), "r1");
   ASSERT_TRUE(t01.has_value());
   ASSERT_TRUE(t10.has_value());
-  EXPECT_THAT(common::Compose(t01->t_self_peer, t10->t_self_peer), IsNearlyPose(Pose2{}, 0.01));
+  EXPECT_THAT(common::Compose(t01->t_self_peer, t10->t_self_peer), IsNearlyPose(Pose2{}, 0.01, 0.01));
   EXPECT_LT(Nees(t01->t_self_peer, sim.TrueTransform(0, 1), t01->covariance), 16.3);
   EXPECT_EQ(sim.agent(0).rejected_messages(), 0);
   EXPECT_EQ(sim.agent(1).rejected_messages(), 0);

@@ -1,5 +1,4 @@
 #include "robot_agent/filters/fastslam.h"
-#include "robot_agent/filters/filter_factory.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "common/angles.h"
+#include "robot_agent/filters/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "tests/robot_agent/tiny_world.h"
 
