@@ -314,14 +314,10 @@ void EkfSlam::HandleLeftovers(const std::vector<Detection>& detections, std::vec
   }
 }
 
-void EkfSlam::Process(const common::SensorStep& step) {
-  step_ = step.lidar.stamp.step;
-  time_s_ = step.lidar.stamp.time_s;
-  Predict(step);
-
+std::vector<EkfSlam::Detection> EkfSlam::SortedDetections(const common::LidarScan& scan) {
   // Valid detections sorted by (range, bearing, id): the result does not depend on scan order.
   std::vector<Detection> detections;
-  for (const auto& d : step.lidar.landmarks) {
+  for (const auto& d : scan.landmarks) {
     if (std::isfinite(d.range_m) && std::isfinite(d.bearing_rad) && d.range_m > 0.0) {
       detections.push_back({d.range_m, WrapAngle(d.bearing_rad), d.landmark_id});
     }
@@ -329,41 +325,48 @@ void EkfSlam::Process(const common::SensorStep& step) {
   std::sort(detections.begin(), detections.end(), [](const Detection& a, const Detection& b) {
     return std::tie(a.range_m, a.bearing_rad, a.landmark_id) < std::tie(b.range_m, b.bearing_rad, b.landmark_id);
   });
+  return detections;
+}
+
+EkfSlam::Association EkfSlam::Associate(const std::vector<Detection>& detections) const {
   const int num_det = static_cast<int>(detections.size());
   const int num_slots = NumSlots();
-
-  // Association: identities first, then nearest neighbours by increasing d2, the map landmarks
-  // before those on probation (which take only the detections the map leaves).
-  std::vector<double> min_d2(num_det, std::numeric_limits<double>::infinity());
+  // Identities first, then nearest neighbours by increasing d2, the map landmarks before those
+  // on probation (which take only the detections the map leaves).
+  Association a;
+  a.min_d2.assign(num_det, std::numeric_limits<double>::infinity());
+  a.det_used.assign(num_det, 0);
+  a.slot_done.assign(num_slots, 0);
   std::vector<std::tuple<bool, double, int, int>> candidates;  // (on probation, d2, detection, slot)
-  std::vector<std::uint8_t> det_used(num_det, 0), slot_done(num_slots, 0);
-  std::vector<std::pair<int, int>> matches;  // (detection, slot)
   for (int d = 0; d < num_det; ++d) {
     if (detections[d].landmark_id >= 0) {
       for (int s = 0; s < num_slots; ++s) {
-        if (slots_[s].landmark_id == detections[d].landmark_id && !slot_done[s]) {
-          matches.emplace_back(d, s);
-          det_used[d] = slot_done[s] = 1;
+        if (slots_[s].landmark_id == detections[d].landmark_id && !a.slot_done[s]) {
+          a.matches.emplace_back(d, s);
+          a.det_used[d] = a.slot_done[s] = 1;
           break;
         }
       }
-      if (det_used[d]) continue;
+      if (a.det_used[d]) continue;
     }
     for (int s = 0; s < num_slots; ++s) {
       if (detections[d].landmark_id >= 0 && slots_[s].landmark_id >= 0) continue;
       const double d2 = AssociationD2(detections[d], s);
-      min_d2[d] = std::min(min_d2[d], d2);
+      a.min_d2[d] = std::min(a.min_d2[d], d2);
       if (gates_.Classify(d2) == AssociationKind::kMatched) candidates.emplace_back(slots_[s].moving, d2, d, s);
     }
   }
   std::sort(candidates.begin(), candidates.end());
   for (const auto& [probation, d2, d, s] : candidates) {
-    if (det_used[d] || slot_done[s]) continue;
-    matches.emplace_back(d, s);
-    det_used[d] = slot_done[s] = 1;
+    if (a.det_used[d] || a.slot_done[s]) continue;
+    a.matches.emplace_back(d, s);
+    a.det_used[d] = a.slot_done[s] = 1;
   }
-  matched_observations_ += static_cast<std::int64_t>(matches.size());
+  return a;
+}
 
+std::vector<bool> EkfSlam::FlagMoving(const std::vector<Detection>& detections,
+                                      const std::vector<std::pair<int, int>>& matches) {
   // ELA: which matched landmarks moved? Those on probation are tested against the map's.
   std::vector<bool> moving(matches.size(), false);
   if (ela_ && !matches.empty()) {
@@ -374,7 +377,13 @@ void EkfSlam::Process(const common::SensorStep& step) {
     }
     moving = ElaTest(x_, p_, obs, r_(0, 0), r_(1, 1), ela_gate_d2_).moving;
   }
+  FlagDrift(detections, matches, &moving);
+  EndProbation(detections, matches, &moving);
+  return moving;
+}
 
+void EkfSlam::FlagDrift(const std::vector<Detection>& detections, const std::vector<std::pair<int, int>>& matches,
+                        std::vector<bool>* moving) {
   // Drift: a mapped landmark that stood within its area in each frame may still creep, its
   // estimate trailing it; the mean of its last ela_drift_window_frames position innovations then
   // stands out (MeanD2; a static landmark's innovations are white with covariance G_z S G_z^T).
@@ -382,7 +391,7 @@ void EkfSlam::Process(const common::SensorStep& step) {
   for (std::size_t i = 0; ela_ && drift_window > 0 && i < matches.size(); ++i) {
     const auto [d, s] = matches[i];
     Slot& slot = slots_[s];
-    if (moving[i] || slot.moving) continue;
+    if ((*moving)[i] || slot.moving) continue;
     Eigen::Matrix2d innovation_cov;
     Eigen::Vector2d nu;
     AssociationD2(detections[d], s, &innovation_cov, &nu);
@@ -390,22 +399,25 @@ void EkfSlam::Process(const common::SensorStep& step) {
     slot.innovations.push_back({time_s_, g.g_z * nu, g.g_z * innovation_cov * g.g_z.transpose()});
     if (static_cast<int>(slot.innovations.size()) > drift_window) slot.innovations.erase(slot.innovations.begin());
     if (static_cast<int>(slot.innovations.size()) == drift_window && MeanD2(slot.innovations) > ela_gate_d2_) {
-      moving[i] = true;
+      (*moving)[i] = true;
       ++creep_flags_;
     }
   }
+}
 
+void EkfSlam::EndProbation(const std::vector<Detection>& detections, const std::vector<std::pair<int, int>>& matches,
+                           std::vector<bool>* moving) {
   // One on probation within its area has stayed there one more frame; after
   // ela_return_after_frames such frames it is back in the map if it showed no velocity meanwhile,
   // else it moved.
   for (std::size_t i = 0; i < matches.size(); ++i) {
     const auto [d, s] = matches[i];
     Slot& slot = slots_[s];
-    if (moving[i] || !slot.moving) continue;
+    if ((*moving)[i] || !slot.moving) continue;
     slot.probation_sightings.push_back(SensorSighting(detections[d]));
     if (++slot.stay_frames < filter_.ela_return_after_frames) continue;
     if (VelocityD2(slot.probation_sightings) > ela_gate_d2_) {
-      moving[i] = true;
+      (*moving)[i] = true;
       ++creep_flags_;
       continue;
     }
@@ -413,8 +425,10 @@ void EkfSlam::Process(const common::SensorStep& step) {
     slot.stay_frames = 0;
     slot.probation_sightings.clear();
   }
-  flagged_observations_ += std::count(moving.begin(), moving.end(), true);
+}
 
+void EkfSlam::Correct(const std::vector<Detection>& detections, const std::vector<std::pair<int, int>>& matches,
+                      const std::vector<bool>& moving) {
   // Correction with the map landmarks that stood still. Where landmarks creep (the share of the
   // observations flagged by the drift or the velocity test so far, with kCreepSharePriorObservations
   // unflagged ones as a prior, has reached ela_young_creep_share), a newly mapped landmark corrects
@@ -435,8 +449,14 @@ void EkfSlam::Process(const common::SensorStep& step) {
       ++slot.corrections;
     }
   }
+}
 
-  // Map management.
+void EkfSlam::ManageMap(const std::vector<Detection>& detections, Association* a, const std::vector<bool>& moving) {
+  const std::vector<std::pair<int, int>>& matches = a->matches;
+  std::vector<std::uint8_t>& det_used = a->det_used;
+  std::vector<std::uint8_t>& slot_done = a->slot_done;
+  const int num_det = static_cast<int>(detections.size());
+  const int num_slots = static_cast<int>(slot_done.size());  // before this step's removals
   std::vector<int> removals;
   restarts_.clear();
   if (ela_) {
@@ -474,7 +494,7 @@ void EkfSlam::Process(const common::SensorStep& step) {
   std::vector<Detection> fresh;
   for (int d = 0; d < num_det; ++d) {
     if (det_used[d]) continue;
-    if (detections[d].landmark_id >= 0 || gates_.Classify(min_d2[d]) == AssociationKind::kNew) {
+    if (detections[d].landmark_id >= 0 || gates_.Classify(a->min_d2[d]) == AssociationKind::kNew) {
       fresh.push_back(detections[d]);
     }
   }
@@ -486,6 +506,19 @@ void EkfSlam::Process(const common::SensorStep& step) {
     const std::uint32_t id = next_track_id_++;
     AddLandmark(det, id, det.landmark_id, robot_index_, id, /*moving=*/false);
   }
+}
+
+void EkfSlam::Process(const common::SensorStep& step) {
+  step_ = step.lidar.stamp.step;
+  time_s_ = step.lidar.stamp.time_s;
+  Predict(step);
+  const std::vector<Detection> detections = SortedDetections(step.lidar);
+  Association association = Associate(detections);
+  matched_observations_ += static_cast<std::int64_t>(association.matches.size());
+  const std::vector<bool> moving = FlagMoving(detections, association.matches);
+  flagged_observations_ += std::count(moving.begin(), moving.end(), true);
+  Correct(detections, association.matches, moving);
+  ManageMap(detections, &association, moving);
 }
 
 FilterEstimate EkfSlam::Estimate() const {

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -168,6 +169,32 @@ class EkfSlam : public SlamFilter {
   // ekf_ela: slot s, seen at det, moved: it is removed and re-initialized on probation at the end
   // of the step; a map landmark's move is noted for the peers.
   void Restart(int s, const Detection& det, std::vector<int>* removals);
+
+  // The stages of Process, in order.
+  // One step's association: the matches (detection, slot) and what they used.
+  struct Association {
+    std::vector<std::pair<int, int>> matches;  // (detection, slot)
+    std::vector<std::uint8_t> det_used, slot_done;
+    std::vector<double> min_d2;  // per detection, its smallest d2 to a slot it may match
+  };
+  // The scan's valid detections in a fixed order.
+  static std::vector<Detection> SortedDetections(const common::LidarScan& scan);
+  Association Associate(const std::vector<Detection>& detections) const;
+  // Per match, whether its landmark moved: the ELA test, then FlagDrift and EndProbation.
+  std::vector<bool> FlagMoving(const std::vector<Detection>& detections,
+                               const std::vector<std::pair<int, int>>& matches);
+  // ekf_ela: a mapped landmark whose recent innovations average beyond its area moved.
+  void FlagDrift(const std::vector<Detection>& detections, const std::vector<std::pair<int, int>>& matches,
+                 std::vector<bool>* moving);
+  // A landmark on probation that stayed long enough in its area returns to the map, unless it
+  // showed a velocity meanwhile (then it moved).
+  void EndProbation(const std::vector<Detection>& detections, const std::vector<std::pair<int, int>>& matches,
+                    std::vector<bool>* moving);
+  // The EKF update with the matched landmarks that stood still.
+  void Correct(const std::vector<Detection>& detections, const std::vector<std::pair<int, int>>& matches,
+               const std::vector<bool>& moving);
+  // Landmarks that moved restarted on probation, missed ones dropped, new ones started.
+  void ManageMap(const std::vector<Detection>& detections, Association* a, const std::vector<bool>& moving);
 
   const common::FilterOptions filter_;
   const common::LidarOptions lidar_;
