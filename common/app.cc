@@ -21,12 +21,6 @@ void AddCommonFlags(CLI::App& app, CommonFlags* flags) {
   app.add_option("--log-level", flags->log_level, "trace, debug, info, warn or error");
 }
 
-ScenarioOptions LoadScenarioFromFlags(const CommonFlags& flags) {
-  ScenarioOptions options = LoadScenario(flags.scenario, flags.overrides);
-  if (flags.seed >= 0) options.seed = static_cast<std::uint64_t>(flags.seed);
-  return options;
-}
-
 const std::atomic<bool>& InstallStopHandler() {
   std::signal(SIGINT, OnStopSignal);
   std::signal(SIGTERM, OnStopSignal);

@@ -8,8 +8,6 @@
 
 #include <CLI/CLI.hpp>
 
-#include "common/config/scenario_options.h"
-
 // What every mrslam executable shares on its command line (--scenario, --domain, --seed,
 // --set, --shm, --log-level), the stop flag that SIGINT/SIGTERM raise, and the top-level
 // error handling: one line on stderr and a non-zero exit code.
@@ -25,9 +23,6 @@ struct CommonFlags {
 };
 
 void AddCommonFlags(CLI::App& app, CommonFlags* flags);
-
-// Loads the scenario with the --set overrides, then applies --seed.
-ScenarioOptions LoadScenarioFromFlags(const CommonFlags& flags);
 
 // The flag SIGINT and SIGTERM set (installed once).
 const std::atomic<bool>& InstallStopHandler();

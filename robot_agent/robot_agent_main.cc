@@ -2,6 +2,8 @@
 #include <spdlog/spdlog.h>
 
 #include "common/app.h"
+#include "common/config/agent_options_projection.h"
+#include "common/config/scenario_flags.h"
 #include "common/dds/participant.h"
 #include "common/logging.h"
 #include "robot_agent/filters/filter_factory.h"
@@ -30,16 +32,17 @@ int main(int argc, char** argv) {
       throw std::runtime_error("--robot: unknown robot id '" + robot_id + "' (not in scenario '" + scenario.name +
                                "')");
     }
-    auto slam = robot_agent::filters::CreateFilter(scenario, robot_id, scenario.seed);
-    if (!slam) throw std::runtime_error("filter '" + scenario.filter.type + "' is not available");
+    // The agent's code gets its own options only: never the scenario, which holds the truth.
+    const robot_agent::AgentOptions agent = common::AgentOptionsFor(scenario, robot_id);
+    auto slam = robot_agent::filters::CreateFilter(agent, scenario.seed);
+    if (!slam) throw std::runtime_error("filter '" + agent.filter.type + "' is not available");
     robot_agent::AgentNodeOptions options;
-    options.robot_id = robot_id;
     options.domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
     options.shared_memory = flags.shared_memory;
     options.timeout_s = scenario.run.ack_timeout_s;
     options.estimate_readers = estimate_readers;
     const auto& stop = common::InstallStopHandler();
-    robot_agent::AgentNode node(scenario, options, std::move(slam));
+    robot_agent::AgentNode node(agent, options, std::move(slam));
     return node.Run(stop) ? 0 : 130;
   });
 }

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/app.h"
+#include "common/config/scenario_flags.h"
 #include "common/dds/participant.h"
 #include "common/logging.h"
 #include "world_sim/node/sim_node.h"

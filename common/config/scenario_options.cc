@@ -11,6 +11,12 @@
 #include "common/config/scenario_keys.h"
 
 namespace mrslam::common {
+using robot_agent::Association;
+using robot_agent::LandmarkKinematics;
+using robot_agent::MapFusionRule;
+using robot_agent::MotionSource;
+using robot_agent::Proposal;
+
 namespace {
 
 // While ScenarioKeys runs: every key path the parser looks up (sequence indices as "[]").

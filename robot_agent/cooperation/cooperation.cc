@@ -96,7 +96,7 @@ bool ValidTransform(const FrameTransform& t) {
 // when options.max_snapshot_landmarks cuts. The alignment selects the own map the same way, so
 // that both sides of a rendezvous align the same two sets of landmarks.
 std::vector<filters::MapLandmark> SnapshotLandmarks(const filters::FilterEstimate& estimate, int self_index,
-                                                    const common::CooperationOptions& options) {
+                                                    const CooperationOptions& options) {
   std::vector<const filters::MapLandmark*> confirmed;
   for (const auto& l : estimate.landmarks) {
     const bool seen_long =
@@ -135,16 +135,16 @@ void TrimToSize(Map* m, std::size_t size) {
 
 }  // namespace
 
-Cooperation::Cooperation(const common::ScenarioOptions& scenario, const std::string& robot_id)
-    : scenario_(scenario),
-      robot_id_(robot_id),
-      self_index_(scenario.RobotIndex(robot_id)),
-      var_range_(scenario.sensors.lidar.range_noise_sd_m * scenario.sensors.lidar.range_noise_sd_m),
-      var_bearing_(scenario.sensors.lidar.bearing_noise_sd_rad * scenario.sensors.lidar.bearing_noise_sd_rad) {
+Cooperation::Cooperation(const AgentOptions& options)
+    : options_(options),
+      robot_id_(options.robot_id),
+      self_index_(options.TeamIndex(options.robot_id)),
+      var_range_(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
+      var_bearing_(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad) {
   // A noiseless lidar still needs a usable measurement covariance.
   var_range_ = std::max(var_range_, 1e-12);
   var_bearing_ = std::max(var_bearing_, 1e-12);
-  if (self_index_ >= 0) first_pose_ = filters::InitialPoseInOwnFrame(scenario.robots[self_index_]);
+  first_pose_ = options.initial_pose;
 }
 
 const std::vector<RendezvousEvent>& Cooperation::rendezvous() const { return rendezvous_; }
@@ -170,7 +170,7 @@ int Cooperation::rejected_messages() const { return rejected_; }
 
 bool Cooperation::HeaderValid(const PeerHeader& h) const {
   if (h.recipient != robot_id_) return false;
-  if (h.sender == robot_id_ || scenario_.RobotIndex(h.sender) < 0) return false;
+  if (h.sender == robot_id_ || options_.TeamIndex(h.sender) < 0) return false;
   // Messages of step k are applied at the start of k+1, after AfterStep(k) of this agent.
   if (any_step_ && h.step > last_step_ + 1) return false;
   return std::isfinite(h.time_s);
@@ -185,14 +185,14 @@ bool Cooperation::MeasurementValid(const RelativeMeasurement& m) const {
 
 bool Cooperation::SnapshotValid(const MapSnapshot& m) const {
   if (!HeaderValid(m.header)) return false;
-  if (static_cast<int>(m.landmarks.size()) > scenario_.cooperation.max_snapshot_landmarks) return false;
-  if (m.known_transforms.size() > scenario_.robots.size()) return false;
-  const int robots = static_cast<int>(scenario_.robots.size());
+  if (static_cast<int>(m.landmarks.size()) > options_.cooperation.max_snapshot_landmarks) return false;
+  if (m.known_transforms.size() > options_.team.size()) return false;
+  const int robots = static_cast<int>(options_.team.size());
   for (const auto& l : m.landmarks) {
     if (!ValidLandmark(l) || l.origin_robot < -1 || l.origin_robot >= robots) return false;
   }
   for (const auto& t : m.known_transforms) {
-    if (scenario_.RobotIndex(t.peer) < 0 || t.peer == m.header.sender || !ValidTransform(t)) return false;
+    if (options_.TeamIndex(t.peer) < 0 || t.peer == m.header.sender || !ValidTransform(t)) return false;
   }
   return HistoryValid(m);
 }
@@ -200,7 +200,7 @@ bool Cooperation::SnapshotValid(const MapSnapshot& m) const {
 bool Cooperation::HistoryValid(const MapSnapshot& m) const {
   if (m.history.empty()) return true;
   // Every step from 1 to the snapshot's, within the bound; finite readings; labels, not -1.
-  if (m.history.size() > static_cast<std::size_t>(scenario_.cooperation.max_history_steps) ||
+  if (m.history.size() > static_cast<std::size_t>(options_.cooperation.max_history_steps) ||
       m.history.size() != m.header.step || !Finite(m.first_pose)) {
     return false;
   }
@@ -245,7 +245,7 @@ void Cooperation::Receive(const PeerInbox& inbox, filters::SlamFilter* filter) {
       continue;
     }
     peer.last_measurement_step = m.header.step;
-    if (static_cast<int>(m.header.step) >= scenario_.rendezvous.enable_from_step) {
+    if (static_cast<int>(m.header.step) >= options_.rendezvous.enable_from_step) {
       peer.peer_measurements[m.header.step] = m;
       TrimToSize(&peer.peer_measurements, kMaxHistory);
     }
@@ -286,13 +286,13 @@ void Cooperation::Receive(const PeerInbox& inbox, filters::SlamFilter* filter) {
     Eigen::Matrix<double, 2, 3> j;
     j << 1.0, 0.0, -(p.y() - t.y), 0.0, 1.0, p.x() - t.x;
     const Eigen::Matrix2d cov = j * peer->transform->Covariance() * j.transpose();
-    filter->ApplyMovedNotice(p, cov, scenario_.cooperation.match_gate_probability);
+    filter->ApplyMovedNotice(p, cov, options_.cooperation.match_gate_probability);
   }
 }
 
 void Cooperation::PairMutualDetections(const std::string& peer_id, filters::SlamFilter* filter) {
   PeerState& peer = peers_[peer_id];
-  const auto window = static_cast<std::int64_t>(scenario_.rendezvous.window_steps);
+  const auto window = static_cast<std::int64_t>(options_.rendezvous.window_steps);
   // Candidate pairs (own step s, peer step t), |s - t| < window, ordered by a key that is the
   // same from both sides: (|s - t|, s + t, the step of the robot with the smaller id).
   const bool self_first = robot_id_ < peer_id;
@@ -338,7 +338,7 @@ void Cooperation::PairMutualDetections(const std::string& peer_id, filters::Slam
 void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t own_step, const OwnDetection& own,
                                        const RelativeMeasurement& theirs, filters::SlamFilter* filter) {
   PeerState& peer = peers_[peer_id];
-  const auto& rv = scenario_.rendezvous;
+  const auto& rv = options_.rendezvous;
   const std::uint32_t step = std::max(own_step, theirs.header.step);
 
   // Encounter bookkeeping.
@@ -354,7 +354,7 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
       peer.last_rendezvous_step = step;
       peer.event_index = static_cast<int>(rendezvous_.size());
       rendezvous_.push_back({peer_id, step, {}, Eigen::Matrix3d::Identity()});
-      peer.snapshot_due = scenario_.cooperation.merge_maps;
+      peer.snapshot_due = options_.cooperation.merge_maps;
     }
     // Every encounter passes on the frames known (chaining needs no map): at a rendezvous with
     // the map, at any other encounter (or without map merging) on their own.
@@ -370,7 +370,7 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
                                                          theirs.sender_covariance, z, var_range_, var_bearing_);
   if (!estimate.t.Vector().allFinite() || !estimate.Covariance().allFinite()) return;
 
-  const bool localize = scenario_.cooperation.cooperative_localization && !refines && peer.transform &&
+  const bool localize = options_.cooperation.cooperative_localization && !refines && peer.transform &&
                         own_step == theirs.header.step && own_step == last_step_ && filter != nullptr;
   if (localize) {
     // The peer's position in the own frame: Compose(T, pose_j), covariance through the
@@ -380,7 +380,7 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
     const Eigen::Matrix3d jp = common::ComposeJacobianRight(peer.transform->t, theirs.sender_pose);
     const Eigen::Matrix3d c =
         jt * peer.transform->Covariance() * jt.transpose() + jp * theirs.sender_covariance * jp.transpose();
-    const double gate = common::ChiSquare2Quantile(scenario_.cooperation.transform_gate_probability);
+    const double gate = common::ChiSquare2Quantile(options_.cooperation.transform_gate_probability);
     if (filter->ObserveKnownRobot(in_own.Translation(), 2.0 * c.topLeftCorner<2, 2>(), own.range_m, own.bearing_rad,
                                   gate)) {
       ++cooperative_updates_;
@@ -392,7 +392,7 @@ void Cooperation::ApplyMutualDetection(const std::string& peer_id, std::uint32_t
   if (peer.transform) {
     // An estimate far outside the one held (e.g. a detection paired with the wrong robot) is
     // not fused.
-    const double gate = ChiSquare3Quantile(scenario_.cooperation.transform_gate_probability);
+    const double gate = ChiSquare3Quantile(options_.cooperation.transform_gate_probability);
     const bool fuse = !peer.met || TransformDistanceSquared(*peer.transform, estimate) <= gate;
     held = fuse ? FuseSplitCi(*peer.transform, estimate) : *peer.transform;
     peer.last_detection_outlier = !fuse;
@@ -422,11 +422,11 @@ Cooperation::CommonLandmarks Cooperation::MatchSnapshot(const MapSnapshot& m, co
   const bool same_step = own.step == m.header.step;
   // A landmark that came from the other side (by provenance) is that side's estimate seen
   // through the transform held when it was merged: it would only confirm that transform.
-  const int sender_index = scenario_.RobotIndex(m.header.sender);
+  const int sender_index = options_.TeamIndex(m.header.sender);
   const Eigen::Matrix3d t_cov = held.Covariance();
   CommonLandmarks out;
   std::vector<filters::MatchCandidate> mine_c, theirs_c;
-  for (const auto& l : SnapshotLandmarks(own, self_index_, scenario_.cooperation)) {
+  for (const auto& l : SnapshotLandmarks(own, self_index_, options_.cooperation)) {
     if ((!same_step && l.moving) || l.origin_robot == sender_index) continue;
     out.mine.push_back(l);
     mine_c.push_back(Candidate(l));
@@ -437,7 +437,7 @@ Cooperation::CommonLandmarks Cooperation::MatchSnapshot(const MapSnapshot& m, co
     theirs_c.push_back(Candidate(filters::TransformLandmark(l, held.t, t_cov)));
   }
   out.match = filters::MatchLandmarks(mine_c, theirs_c,
-                                      common::ChiSquare2Quantile(scenario_.cooperation.match_gate_probability));
+                                      common::ChiSquare2Quantile(options_.cooperation.match_gate_probability));
   return out;
 }
 
@@ -456,9 +456,9 @@ std::optional<smoother::BatchSmoother::Kinematics> Cooperation::JointKinematics(
   if (l.motion == filters::LandmarkMotionKind::kStatic) return smoother::BatchSmoother::Kinematics{};
   if (l.motion != filters::LandmarkMotionKind::kUnicycle || (l.v_mps == 0.0 && l.w_radps == 0.0)) return std::nullopt;
   // The filter's (v, w) is a weighted mean over its particles' candidates: the nearest one.
-  const int c = filters::NearestKnownKinematics(scenario_.filter.known_kinematics, l.v_mps, l.w_radps);
+  const int c = filters::NearestKnownKinematics(options_.filter.known_kinematics, l.v_mps, l.w_radps);
   if (c < 0) return std::nullopt;
-  const common::KnownKinematics& k = scenario_.filter.known_kinematics[c];
+  const KnownKinematics& k = options_.filter.known_kinematics[c];
   return smoother::BatchSmoother::Kinematics{k.v_mps == 0.0 && k.w_radps == 0.0, k.v_mps, k.w_radps};
 }
 
@@ -505,9 +505,9 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
     return out;
   };
   // The sender's first pose in the own frame, started from the held transform.
-  smoother::BatchSmoother joint(scenario_,
+  smoother::BatchSmoother joint(options_,
                                 {{robot_id_, first_pose_}, {m.header.sender, common::Compose(held.t, m.first_pose)}},
-                                kinematics, scenario_.rendezvous.enable_from_step);
+                                kinematics, options_.rendezvous.enable_from_step);
   // Solved as it grows, so that each solve starts near its answer: after 5 steps, then whenever
   // the history has grown by a quarter (at least 5 steps), and at the end; a few dozen solves
   // for hundreds of steps.
@@ -527,7 +527,7 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
   const Eigen::Matrix3d j = common::ComposeJacobianLeft(joint.FirstPose(1), first_inverse);
   out.dependent = j * joint.FirstPoseCovariance(1) * j.transpose();
   out.dependent = 0.5 * (out.dependent + out.dependent.transpose()).eval();
-  const double gate = ChiSquare3Quantile(scenario_.cooperation.transform_gate_probability);
+  const double gate = ChiSquare3Quantile(options_.cooperation.transform_gate_probability);
   if (!Finite(out.t) || !common::IsSymmetricPositiveDefinite<3>(out.dependent) ||
       TransformDistanceSquared(held, out) > gate) {
     return std::nullopt;
@@ -537,7 +537,7 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
 
 void Cooperation::Record(const common::SensorStep& step, const filters::FilterEstimate& estimate) {
   const bool fits = step.lidar.stamp.step == history_.size() + 1 &&
-                    history_.size() < static_cast<std::size_t>(scenario_.cooperation.max_history_steps) &&
+                    history_.size() < static_cast<std::size_t>(options_.cooperation.max_history_steps) &&
                     estimate.labels_detections && estimate.detection_tracks.size() == step.lidar.landmarks.size();
   if (!history_usable_ || !fits) {
     history_usable_ = false;
@@ -582,7 +582,7 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, filters::SlamFilter* filte
     k.transform = k.transform ? FuseSplitCi(*k.transform, chained) : chained;
     k.transform_step = m.header.step;
   }
-  if (!scenario_.cooperation.merge_maps || filter == nullptr || m.landmarks.empty() || sender.last_detection_outlier) {
+  if (!options_.cooperation.merge_maps || filter == nullptr || m.landmarks.empty() || sender.last_detection_outlier) {
     return;
   }
   std::vector<filters::MapLandmark> moved;
@@ -599,15 +599,15 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, filters::SlamFilter* filte
     }
   }
   if (moved.empty()) return;
-  filter->MergeLandmarks(moved, scenario_.cooperation.map_fusion, scenario_.cooperation.match_gate_probability,
-                         scenario_.cooperation.merge_min_separation_m);
+  filter->MergeLandmarks(moved, options_.cooperation.map_fusion, options_.cooperation.match_gate_probability,
+                         options_.cooperation.merge_min_separation_m);
 }
 
 MapSnapshot Cooperation::MakeSnapshot(const std::string& peer, const filters::FilterEstimate& estimate,
                                       bool with_map) const {
   MapSnapshot m;
   m.header = {robot_id_, peer, estimate.step, estimate.time_s, 0};
-  if (with_map) m.landmarks = SnapshotLandmarks(estimate, self_index_, scenario_.cooperation);
+  if (with_map) m.landmarks = SnapshotLandmarks(estimate, self_index_, options_.cooperation);
   if (with_map && JointPossible()) {
     m.first_pose = first_pose_;
     m.history = history_;
@@ -643,12 +643,12 @@ PeerOutbox Cooperation::AfterStep(const common::SensorStep& step, const filters:
   const std::uint32_t k = estimate.step;
   last_step_ = k;
   any_step_ = true;
-  const auto& rv = scenario_.rendezvous;
+  const auto& rv = options_.rendezvous;
   Eigen::Matrix3d covariance = 0.5 * (estimate.covariance + estimate.covariance.transpose());
   covariance.diagonal().array() += kCovarianceFloor;
   if (static_cast<int>(k) >= rv.enable_from_step && Finite(estimate.pose) && covariance.allFinite()) {
     for (const auto& d : scan.robots) {
-      if (d.seen_robot_id == robot_id_ || scenario_.RobotIndex(d.seen_robot_id) < 0) continue;
+      if (d.seen_robot_id == robot_id_ || options_.TeamIndex(d.seen_robot_id) < 0) continue;
       if (!std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad) || d.range_m <= 0.0) continue;
       PeerState& peer = peers_[d.seen_robot_id];
       if (!peer.own_detections.emplace(k, OwnDetection{d.range_m, d.bearing_rad, estimate.pose, covariance}).second) {

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "common/config/scenario_options.h"
 #include "robot_agent/cooperation/peer_messages.h"
 #include "robot_agent/cooperation/rendezvous.h"
 #include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/options/agent_options.h"
 #include "robot_agent/smoother/batch_smoother.h"
 
 namespace mrslam::robot_agent::cooperation {
@@ -26,7 +26,7 @@ namespace mrslam::robot_agent::cooperation {
 //   3. AfterStep(step k, estimate k)         -> the outbox of step k
 class Cooperation {
  public:
-  Cooperation(const common::ScenarioOptions& scenario, const std::string& robot_id);
+  explicit Cooperation(const AgentOptions& options);
 
   // Validates and applies peer messages. Rejected messages are counted and leave the map unchanged.
   void Receive(const PeerInbox& inbox, filters::SlamFilter* filter);
@@ -124,8 +124,8 @@ class Cooperation {
   // Whether the own history can take part in a joint estimate: joint_transform on, the history
   // whole, and landmark kinematics it models (static or known candidates, not a constant turn rate).
   bool JointPossible() const {
-    return scenario_.cooperation.joint_transform && history_usable_ &&
-           scenario_.filter.landmark_kinematics != common::LandmarkKinematics::kConstantTurnRate;
+    return options_.cooperation.joint_transform && history_usable_ &&
+           options_.filter.landmark_kinematics != LandmarkKinematics::kConstantTurnRate;
   }
   // The kinematics the joint estimate gives a mapped landmark: static, or the known candidate
   // nearest to its (v, w); nothing for a landmark whose heading is not known yet or that is
@@ -141,9 +141,9 @@ class Cooperation {
   MapSnapshot MakeSnapshot(const std::string& peer, const filters::FilterEstimate& estimate, bool with_map) const;
   void Reject() { ++rejected_; }
 
-  common::ScenarioOptions scenario_;
+  AgentOptions options_;
   std::string robot_id_;
-  int self_index_ = -1;  // in the scenario (the provenance of the own landmarks)
+  int self_index_ = -1;  // in the team (the provenance of the own landmarks)
   double var_range_ = 0.0, var_bearing_ = 0.0;
   std::map<std::string, PeerState> peers_;
   std::vector<RendezvousEvent> rendezvous_;

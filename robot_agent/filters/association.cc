@@ -4,9 +4,9 @@
 
 namespace mrslam::robot_agent::filters {
 
-AssociationGates AssociationGates::FromOptions(const common::FilterOptions& options) {
+AssociationGates AssociationGates::FromOptions(const FilterOptions& options) {
   AssociationGates g;
-  g.euclidean = options.association == common::Association::kEuclidean;
+  g.euclidean = options.association == Association::kEuclidean;
   if (g.euclidean) {
     g.match = options.euclidean_gate * options.euclidean_gate;
     g.create = g.match;

@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "common/config/scenario_options.h"
+#include "robot_agent/options/agent_options.h"
 
 // Data association of one detection against one particle's landmarks (paper A's modification 2:
 // on the predicted measurements), by nearest neighbour under a gate.
@@ -24,7 +24,7 @@ struct AssociationGates {
   double match = 0.0;
   double create = 0.0;
 
-  static AssociationGates FromOptions(const common::FilterOptions& options);
+  static AssociationGates FromOptions(const FilterOptions& options);
   AssociationKind Classify(double d2) const;
 };
 

@@ -57,20 +57,19 @@ void JosephCovariance(Eigen::MatrixXd* p, const Eigen::MatrixXd& k, const Eigen:
 
 }  // namespace
 
-EkfSlam::EkfSlam(const common::ScenarioOptions& options, const std::string& robot_id, bool ela)
+EkfSlam::EkfSlam(const AgentOptions& options, bool ela)
     : filter_(options.filter),
       lidar_(options.sensors.lidar),
       odometry_(options.sensors.odometry),
       noise_(options.noise),
-      step_dt_s_(options.run.dt_s),
+      step_dt_s_(options.dt_s),
       ela_(ela),
       gates_(AssociationGates::FromOptions(options.filter)),
       ela_gate_d2_(common::ChiSquare2Quantile(options.filter.ela_gate_probability)),
-      robot_index_(options.RobotIndex(robot_id)) {
+      robot_index_(options.TeamIndex(options.robot_id)) {
   r_ << lidar_.range_noise_sd_m * lidar_.range_noise_sd_m, 0.0, 0.0,
       lidar_.bearing_noise_sd_rad * lidar_.bearing_noise_sd_rad;
-  const common::Pose2 start = robot_index_ >= 0 ? InitialPoseInOwnFrame(options.robots[robot_index_]) : common::Pose2{};
-  x_ = start.Vector();
+  x_ = options.initial_pose.Vector();
   p_ = Eigen::MatrixXd::Zero(3, 3);  // the initial pose in the own frame is known
 }
 
@@ -546,7 +545,7 @@ FilterEstimate EkfSlam::Estimate() const {
   return e;
 }
 
-int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
+int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                             double gate_probability, double too_close_m) {
   std::vector<MatchCandidate> own, incoming;
   std::vector<int> own_slot;  // the map landmarks (not those on probation)
@@ -583,7 +582,7 @@ int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_fra
     const int j = 3 + 2 * own_slot[match[i]];
     const int n = static_cast<int>(x_.size());
     Eigen::Matrix2d r0 = r;
-    if (rule == common::MapFusionRule::kCovarianceIntersection) {
+    if (rule == MapFusionRule::kCovarianceIntersection) {
       // omega minimizing det((omega P_mm^-1 + (1 - omega) r^-1)^-1), on a grid. Full CI would
       // update P / omega with r / (1 - omega); inflating the whole joint covariance by 1 / omega
       // at every merged landmark compounds over a snapshot, so only the incoming estimate is
@@ -602,7 +601,7 @@ int EkfSlam::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_fra
     }
     const Eigen::MatrixXd hp = p_.middleRows(j, 2);
     Eigen::MatrixXd k;
-    if (rule == common::MapFusionRule::kAverage) {
+    if (rule == MapFusionRule::kAverage) {
       k = Eigen::MatrixXd::Zero(n, 2);
       k.block<2, 2>(j, 0) = 0.5 * Eigen::Matrix2d::Identity();
     } else {
@@ -640,9 +639,8 @@ bool EkfSlam::ApplyMovedNotice(const Eigen::Vector2d& position, const Eigen::Mat
   return true;
 }
 
-std::unique_ptr<SlamFilter> CreateEkfSlam(const common::ScenarioOptions& options, const std::string& robot_id,
-                                          bool ela) {
-  return std::make_unique<EkfSlam>(options, robot_id, ela);
+std::unique_ptr<SlamFilter> CreateEkfSlam(const AgentOptions& options, bool ela) {
+  return std::make_unique<EkfSlam>(options, ela);
 }
 
 }  // namespace mrslam::robot_agent::filters

@@ -9,11 +9,11 @@
 
 #include <Eigen/Core>
 
-#include "common/config/scenario_options.h"
 #include "common/sensor_types.h"
 #include "robot_agent/filters/association.h"
 #include "robot_agent/filters/ela.h"
 #include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/options/agent_options.h"
 
 namespace mrslam::robot_agent::filters {
 
@@ -69,7 +69,7 @@ namespace mrslam::robot_agent::filters {
 // Not thread-safe; pure (no DDS, no wall clock).
 class EkfSlam : public SlamFilter {
  public:
-  EkfSlam(const common::ScenarioOptions& options, const std::string& robot_id, bool ela);
+  EkfSlam(const AgentOptions& options, bool ela);
 
   void Process(const common::SensorStep& step) override;
   FilterEstimate Estimate() const override;
@@ -80,7 +80,7 @@ class EkfSlam : public SlamFilter {
   // covariance is not inflated by 1 / omega, which would compound over a snapshot; average:
   // K = I / 2 on the landmark rows) in Joseph form; unmatched ones (not moving) are appended
   // uncorrelated, except those too close to a mapped one (kTooClose).
-  int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
+  int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                      double gate_probability, double too_close_m) override;
 
   // Landmarks found moving since the last call (ekf_ela), for "landmark moved" notices.
@@ -196,7 +196,7 @@ class EkfSlam : public SlamFilter {
   // Landmarks that moved restarted on probation, missed ones dropped, new ones started.
   void ManageMap(const std::vector<Detection>& detections, Association* a, const std::vector<bool>& moving);
 
-  const common::FilterOptions filter_;
+  const FilterOptions filter_;
   const common::LidarOptions lidar_;
   const common::OdometryOptions odometry_;
   const common::NoiseOptions noise_;
@@ -204,7 +204,7 @@ class EkfSlam : public SlamFilter {
   const bool ela_;
   const AssociationGates gates_;
   const double ela_gate_d2_;
-  const int robot_index_;  // in the scenario: the provenance of the landmarks it maps
+  const int robot_index_;  // in the team: the provenance of the landmarks it maps
   Eigen::Matrix2d r_;      // lidar noise diag(var_r, var_b)
 
   Eigen::VectorXd x_;
@@ -220,8 +220,7 @@ class EkfSlam : public SlamFilter {
   std::int64_t creep_flags_ = 0;  // flags by the drift or the velocity test
 };
 
-// The ekf (ela = false) or ekf_ela (ela = true) filter for robot robot_id.
-std::unique_ptr<SlamFilter> CreateEkfSlam(const common::ScenarioOptions& options, const std::string& robot_id,
-                                          bool ela);
+// The ekf (ela = false) or ekf_ela (ela = true) filter for the agent of options.
+std::unique_ptr<SlamFilter> CreateEkfSlam(const AgentOptions& options, bool ela);
 
 }  // namespace mrslam::robot_agent::filters

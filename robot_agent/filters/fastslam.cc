@@ -25,13 +25,13 @@ using common::WrapAngle;
 constexpr double kUnknownHeadingVar = kPi * kPi / 3.0;
 
 // Largest landmark speed the filter may meet: the fastest known candidate, else the bound.
-double MaxLandmarkSpeed(const common::FilterOptions& f) {
-  if (f.landmark_kinematics == common::LandmarkKinematics::kKnownCandidates) {
+double MaxLandmarkSpeed(const FilterOptions& f) {
+  if (f.landmark_kinematics == LandmarkKinematics::kKnownCandidates) {
     double s = 0.0;
     for (const auto& k : f.known_kinematics) s = std::max(s, std::abs(k.v_mps));
     return s;
   }
-  return f.landmark_kinematics == common::LandmarkKinematics::kStatic ? 0.0 : f.max_landmark_speed_mps;
+  return f.landmark_kinematics == LandmarkKinematics::kStatic ? 0.0 : f.max_landmark_speed_mps;
 }
 
 // Length of the chord travelled in n unicycle steps of v dt turning w dt each:
@@ -75,23 +75,23 @@ double HeadingCovOf(const LandmarkBlock<D>& b, int i, int l) {  // cov(i, headin
 }  // namespace
 
 template <int D>
-FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string& robot_id, std::uint64_t seed)
+FastSlam<D>::FastSlam(const AgentOptions& options, std::uint64_t seed)
     : filter_(options.filter),
       lidar_(options.sensors.lidar),
       imu_(options.sensors.imu),
       noise_(options.noise),
       odometry_var_(options.sensors.odometry.v_noise_sd_mps * options.sensors.odometry.v_noise_sd_mps,
                     options.sensors.odometry.w_noise_sd_radps * options.sensors.odometry.w_noise_sd_radps),
-      step_dt_s_(options.run.dt_s),
+      step_dt_s_(options.dt_s),
       gates_(AssociationGates::FromOptions(options.filter)),
-      fastslam2_(options.filter.proposal == common::Proposal::kMeasurement),
-      robot_index_(options.RobotIndex(robot_id)),
+      fastslam2_(options.filter.proposal == Proposal::kMeasurement),
+      robot_index_(options.TeamIndex(options.robot_id)),
       var_r_(lidar_.range_noise_sd_m * lidar_.range_noise_sd_m),
       var_b_(lidar_.bearing_noise_sd_rad * lidar_.bearing_noise_sd_rad),
       log_new_d2_(common::ChiSquare2Quantile(options.filter.new_landmark_probability)),
       max_position_var_(options.filter.max_landmark_position_sd_m * options.filter.max_landmark_position_sd_m),
       batch_(var_r_, var_b_),
-      rng_(seed, robot_id + "/fastslam"),
+      rng_(seed, options.robot_id + "/fastslam"),
       last_ess_(options.filter.particles),
       calibration_(options.filter) {
   // Landmark process noise per step: none for static landmarks; (x, y, heading) from the
@@ -107,7 +107,7 @@ FastSlam<D>::FastSlam(const common::ScenarioOptions& options, const std::string&
   const double s_max_step = MaxLandmarkSpeed(filter_) * step_dt_s_;
   unknown_heading_inflation_ = 0.5 * s_max_step * s_max_step;
 
-  const Pose2 start = robot_index_ >= 0 ? InitialPoseInOwnFrame(options.robots[robot_index_]) : Pose2{};
+  const Pose2 start = options.initial_pose;
   const int n = std::max(1, filter_.particles);
   particles_.assign(n, Particle{start, 0.0, 0, {}});
   log_weights_.assign(n, -std::log(static_cast<double>(n)));
@@ -132,7 +132,7 @@ void FastSlam<D>::MotionFromStep(const common::SensorStep& step, std::vector<Seg
                                  Eigen::Vector3d* variance) {
   segments->clear();
   *variance = noise_.robot_process_var;
-  imu_step_ = filter_.motion_source == common::MotionSource::kImu && !step.imu.readings.empty();
+  imu_step_ = filter_.motion_source == MotionSource::kImu && !step.imu.readings.empty();
   if (imu_step_) {
     // w = mean gyro rate; the speed is part of each particle's state (the robot starts at rest):
     //   v_p += mean(accel_x) dt + N(0, sd_a^2 dt^2 / n),
@@ -205,21 +205,36 @@ template <int D>
 void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, const Eigen::Vector3d& var, double dt,
                                   const std::vector<Detection>& detections, UpdateBatch<D>* batch) {
   Particle& particle = particles_[p];
-  // 1. Motion prior N(mu, Sigma).
-  // From the IMU the particle's speed is v ~ N(v_p + dv, q) (q = imu_speed_var_), which moves
-  // the pose along the direction of travel u by dt (v - v_p - dv): the pose prior gains dt^2 q u u^T.
-  Pose2 mu = particle.pose;
-  Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
-  double v_prior = 0.0;
-  Eigen::Vector2d u = Eigen::Vector2d::Zero(), prior_xy = Eigen::Vector2d::Zero();
+  // 1. Motion prior.
+  PoseProposal proposal = MotionPrior(particle, segments, var);
+  // 2. Landmark prediction.
+  PredictLandmarks(&particle, dt);
+  // 3-4. Association and proposal.
+  AssociateDetections(p, detections, &proposal);
+  SamplePose(&particle, proposal);
+  // 5. Landmark updates at the sampled pose; new landmarks.
+  UpdateLandmarks(p, detections, batch);
+}
+
+template <int D>
+typename FastSlam<D>::PoseProposal FastSlam<D>::MotionPrior(const Particle& particle,
+                                                            const std::vector<Segment>& segments,
+                                                            const Eigen::Vector3d& var) {
+  // N(mu, Sigma). From the IMU the particle's speed is v ~ N(v_p + dv, q) (q = imu_speed_var_),
+  // which moves the pose along the direction of travel u by dt (v - v_p - dv): the pose prior
+  // gains dt^2 q u u^T.
+  PoseProposal prior;
+  Pose2& mu = prior.mu;
+  Eigen::Matrix3d& sigma = prior.sigma;
+  mu = particle.pose;
   if (imu_step_) {
     const Segment& s = segments.front();
-    v_prior = particle.speed_mps + imu_speed_change_;
-    u = Eigen::Vector2d(std::cos(mu.heading + 0.5 * s.w_radps * s.dt_s),
-                        std::sin(mu.heading + 0.5 * s.w_radps * s.dt_s));
-    mu = common::UnicycleStep(mu, v_prior, s.w_radps, s.dt_s);
-    prior_xy = mu.Translation();
-    sigma.topLeftCorner<2, 2>() += s.dt_s * s.dt_s * imu_speed_var_ * u * u.transpose();
+    prior.v_prior = particle.speed_mps + imu_speed_change_;
+    prior.u = Eigen::Vector2d(std::cos(mu.heading + 0.5 * s.w_radps * s.dt_s),
+                              std::sin(mu.heading + 0.5 * s.w_radps * s.dt_s));
+    mu = common::UnicycleStep(mu, prior.v_prior, s.w_radps, s.dt_s);
+    prior.prior_xy = mu.Translation();
+    sigma.topLeftCorner<2, 2>() += s.dt_s * s.dt_s * imu_speed_var_ * prior.u * prior.u.transpose();
   } else {
     // The odometry's (v, w) noise through each segment: Sigma = F Sigma F^T + G Q_u G^T.
     for (const auto& s : segments) {
@@ -229,102 +244,124 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
     }
   }
   sigma += var.asDiagonal();
-  const double prior_along_var = u.dot(sigma.topLeftCorner<2, 2>() * u);
-  if (!fastslam2_) {
+  prior.prior_along_var = prior.u.dot(sigma.topLeftCorner<2, 2>() * prior.u);
+  if (!fastslam2_) {  // FastSLAM 1.0 samples the pose from the motion prior alone
     mu = Pose2::FromVector(mu.Vector() + rng_.Gaussian<3>(sigma));
     sigma.setZero();
   }
-  // 2. Landmark prediction.
-  PredictLandmarks(&particle, dt);
+  return prior;
+}
 
-  // 3-4. Association and proposal.
-  const int count = particle.count;
-  const int num_blocks = static_cast<int>(particle.blocks.size());
-  d2_.resize(static_cast<std::size_t>(num_blocks) * kLanes);
-  used_.assign(count, 0);
+template <int D>
+void FastSlam<D>::AssociateDetections(int p, const std::vector<Detection>& detections, PoseProposal* proposal) {
+  const Particle& particle = particles_[p];
+  d2_.resize(particle.blocks.size() * kLanes);
+  used_.assign(particle.count, 0);
   matches_.clear();
   creations_.clear();
-  const Eigen::Matrix2d r = Eigen::Vector2d(var_r_, var_b_).asDiagonal();
   for (const Detection& det : detections) {
-    int slot = -1;
-    AssociationKind kind = AssociationKind::kNew;
-    if (det.landmark_id >= 0) {
-      slot = FindIdentity(particle, det.landmark_id);
-      kind = slot < 0 ? AssociationKind::kNew : (used_[slot] ? AssociationKind::kIgnored : AssociationKind::kMatched);
-    } else if (count > 0) {
-      for (int b = 0; b < num_blocks; ++b) {
-        GateBlock(*particle.blocks[b], std::min(kLanes, count - b * kLanes), mu, sigma, det.range_m, det.bearing_rad,
-                  var_r_, var_b_, gates_.euclidean, &d2_[static_cast<std::size_t>(b) * kLanes]);
-      }
-      slot = NearestUnused(d2_.data(), count, used_);
-      if (slot >= 0) kind = gates_.Classify(d2_[slot]);
-    }
+    const auto [slot, kind] = Associate(particle, det, *proposal);
     if (kind == AssociationKind::kNew) {
       // Weight: the density at the new-landmark gate under S0 = H_x Sigma H_x^T + R, with H_x
       // at the point the detection sees.
-      const Eigen::Vector2d point = common::PointFromRangeBearing(mu, {det.range_m, det.bearing_rad});
-      const Eigen::Matrix<double, 2, 3> hx = MeasurementJacobianPose(point, mu);
-      const Eigen::Matrix2d s0 = hx * sigma * hx.transpose() + r;
+      const Eigen::Vector2d point = common::PointFromRangeBearing(proposal->mu, {det.range_m, det.bearing_rad});
+      const Eigen::Matrix<double, 2, 3> hx = MeasurementJacobianPose(point, proposal->mu);
+      const Eigen::Matrix2d s0 = hx * proposal->sigma * hx.transpose() + ReadingCovariance();
       log_weights_[p] += -0.5 * log_new_d2_ - std::log(2.0 * kPi) - 0.5 * std::log(s0.determinant());
       creations_.push_back(det.index);
       continue;
     }
-    // Likelihood of z under the chosen landmark: S = H_m P_pp H_m^T + H_x Sigma H_x^T + R.
-    const Block& block = *particle.blocks[slot / kLanes];
-    const int lane = slot % kLanes;
-    const Eigen::Vector2d landmark(block.Mean(0, lane), block.Mean(1, lane));
-    const RangeBearingModel<double> m =
-        PredictMeasurement<double>(landmark.x(), landmark.y(), mu.x, mu.y, mu.heading, det.range_m, det.bearing_rad);
-    Eigen::Matrix2d hm;
-    hm << m.a00, m.a01, m.a10, m.a11;
-    Eigen::Matrix<double, 2, 3> hx;
-    hx.leftCols<2>() = -hm;
-    hx.col(2) = Eigen::Vector2d(0.0, -1.0);
-    Eigen::Matrix2d p_pp;
-    p_pp << block.Cov(0, 0, lane), block.Cov(0, 1, lane), block.Cov(0, 1, lane), block.Cov(1, 1, lane);
-    const Eigen::Matrix2d s = hm * p_pp * hm.transpose() + hx * sigma * hx.transpose() + r;
-    const Eigen::Vector2d nu(m.nu_r, m.nu_b);
-    if (det.landmark_id >= 0 && filter_.outlier_gate_probability < 1.0) {
-      // Outlier gate for identified detections (filter.outlier_gate_probability): beyond the
-      // chi-square 2 dof gate d2_max = -2 ln(1 - p) a reading is an outlier (a wrong range):
-      // its likelihood is capped at the gate and it updates nothing.
-      const double d2_max = -2.0 * std::log(1.0 - filter_.outlier_gate_probability);
-      const double d2 = nu.dot(s.ldlt().solve(nu));
-      if (d2 > d2_max) {
-        log_weights_[p] += -0.5 * d2_max - std::log(2.0 * kPi) - 0.5 * std::log(s.determinant());
-        continue;
-      }
-    }
-    log_weights_[p] += common::LogGaussian2(nu, s);
-    if (kind == AssociationKind::kIgnored) continue;
-    used_[slot] = 1;
-    matches_.push_back({slot, det.index});
-    if (fastslam2_) {
-      // Pose EKF update with the landmark's predicted-measurement covariance as noise.
-      const Eigen::Matrix<double, 3, 2> k = sigma * hx.transpose() * s.inverse();
-      mu = Pose2::FromVector(mu.Vector() + k * nu);
-      sigma = (Eigen::Matrix3d::Identity() - k * hx) * sigma;
-      sigma = 0.5 * (sigma + sigma.transpose()).eval();
+    WeighMatch(p, det, slot, kind, proposal);
+  }
+}
+
+template <int D>
+std::pair<int, AssociationKind> FastSlam<D>::Associate(const Particle& particle, const Detection& det,
+                                                       const PoseProposal& proposal) {
+  const int count = particle.count;
+  if (det.landmark_id >= 0) {
+    const int slot = FindIdentity(particle, det.landmark_id);
+    return {slot,
+            slot < 0 ? AssociationKind::kNew : (used_[slot] ? AssociationKind::kIgnored : AssociationKind::kMatched)};
+  }
+  if (count == 0) return {-1, AssociationKind::kNew};
+  const int num_blocks = static_cast<int>(particle.blocks.size());
+  for (int b = 0; b < num_blocks; ++b) {
+    GateBlock(*particle.blocks[b], std::min(kLanes, count - b * kLanes), proposal.mu, proposal.sigma, det.range_m,
+              det.bearing_rad, var_r_, var_b_, gates_.euclidean, &d2_[static_cast<std::size_t>(b) * kLanes]);
+  }
+  const int slot = NearestUnused(d2_.data(), count, used_);
+  return {slot, slot >= 0 ? gates_.Classify(d2_[slot]) : AssociationKind::kNew};
+}
+
+template <int D>
+void FastSlam<D>::WeighMatch(int p, const Detection& det, int slot, AssociationKind kind, PoseProposal* proposal) {
+  // Likelihood of z under the chosen landmark: S = H_m P_pp H_m^T + H_x Sigma H_x^T + R.
+  const Pose2& mu = proposal->mu;
+  Eigen::Matrix3d& sigma = proposal->sigma;
+  const Block& block = *particles_[p].blocks[slot / kLanes];
+  const int lane = slot % kLanes;
+  const Eigen::Vector2d landmark(block.Mean(0, lane), block.Mean(1, lane));
+  const RangeBearingModel<double> m =
+      PredictMeasurement<double>(landmark.x(), landmark.y(), mu.x, mu.y, mu.heading, det.range_m, det.bearing_rad);
+  Eigen::Matrix2d hm;
+  hm << m.a00, m.a01, m.a10, m.a11;
+  Eigen::Matrix<double, 2, 3> hx;
+  hx.leftCols<2>() = -hm;
+  hx.col(2) = Eigen::Vector2d(0.0, -1.0);
+  Eigen::Matrix2d p_pp;
+  p_pp << block.Cov(0, 0, lane), block.Cov(0, 1, lane), block.Cov(0, 1, lane), block.Cov(1, 1, lane);
+  const Eigen::Matrix2d s = hm * p_pp * hm.transpose() + hx * sigma * hx.transpose() + ReadingCovariance();
+  const Eigen::Vector2d nu(m.nu_r, m.nu_b);
+  if (det.landmark_id >= 0 && filter_.outlier_gate_probability < 1.0) {
+    // Outlier gate for identified detections (filter.outlier_gate_probability): beyond the
+    // chi-square 2 dof gate d2_max = -2 ln(1 - p) a reading is an outlier (a wrong range):
+    // its likelihood is capped at the gate and it updates nothing.
+    const double d2_max = -2.0 * std::log(1.0 - filter_.outlier_gate_probability);
+    const double d2 = nu.dot(s.ldlt().solve(nu));
+    if (d2 > d2_max) {
+      log_weights_[p] += -0.5 * d2_max - std::log(2.0 * kPi) - 0.5 * std::log(s.determinant());
+      return;
     }
   }
+  log_weights_[p] += common::LogGaussian2(nu, s);
+  if (kind == AssociationKind::kIgnored) return;
+  used_[slot] = 1;
+  matches_.push_back({slot, det.index});
   if (fastslam2_) {
-    const Eigen::LLT<Eigen::Matrix3d> llt(sigma);
+    // Pose EKF update with the landmark's predicted-measurement covariance as noise.
+    const Eigen::Matrix<double, 3, 2> k = sigma * hx.transpose() * s.inverse();
+    proposal->mu = Pose2::FromVector(mu.Vector() + k * nu);
+    sigma = (Eigen::Matrix3d::Identity() - k * hx) * sigma;
+    sigma = 0.5 * (sigma + sigma.transpose()).eval();
+  }
+}
+
+template <int D>
+void FastSlam<D>::SamplePose(Particle* particle, const PoseProposal& proposal) {
+  Pose2 mu = proposal.mu;
+  if (fastslam2_) {
+    const Eigen::LLT<Eigen::Matrix3d> llt(proposal.sigma);
     const Eigen::Vector3d n(rng_.Normal(), rng_.Normal(), rng_.Normal());
     const Eigen::Vector3d delta =
-        llt.info() == Eigen::Success ? Eigen::Vector3d(llt.matrixL() * n) : rng_.Gaussian<3>(sigma);
+        llt.info() == Eigen::Success ? Eigen::Vector3d(llt.matrixL() * n) : rng_.Gaussian<3>(proposal.sigma);
     mu = Pose2::FromVector(mu.Vector() + delta);
   }
-  particle.pose = mu;
+  particle->pose = mu;
   if (imu_step_) {
     // The speed given the sampled pose (the scan depends on the speed only through the pose),
     // from the prior's joint Gaussian of (along-track position, speed): gain k = dt q / Var(along).
     const double dt_q = step_dt_s_ * imu_speed_var_;
-    const double k = prior_along_var > 0.0 ? dt_q / prior_along_var : 0.0;
-    particle.speed_mps = v_prior + k * u.dot(mu.Translation() - prior_xy) +
-                         rng_.Normal(0.0, std::sqrt(std::max(0.0, imu_speed_var_ - k * dt_q)));
+    const double k = proposal.prior_along_var > 0.0 ? dt_q / proposal.prior_along_var : 0.0;
+    particle->speed_mps = proposal.v_prior + k * proposal.u.dot(mu.Translation() - proposal.prior_xy) +
+                          rng_.Normal(0.0, std::sqrt(std::max(0.0, imu_speed_var_ - k * dt_q)));
   }
+}
 
-  // 5. Landmark updates at the sampled pose; new landmarks.
+template <int D>
+void FastSlam<D>::UpdateLandmarks(int p, const std::vector<Detection>& detections, UpdateBatch<D>* batch) {
+  Particle& particle = particles_[p];
+  const Pose2& pose = particle.pose;
   std::uint32_t* labels = detection_labels_.data() + static_cast<std::size_t>(p) * detections.size();
   for (const Match& match : matches_) {
     Block* block = MutableBlock(&particle, match.slot / kLanes);
@@ -332,9 +369,9 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
     LandmarkMeta& meta = block->meta[lane];
     const Detection& det = detections[match.detection];
     if (meta.position_only) {
-      StartFullState(block, lane, mu, det);
+      StartFullState(block, lane, pose, det);
     } else {
-      batch->Add(block, lane, mu, det.range_m, det.bearing_rad);
+      batch->Add(block, lane, pose, det.range_m, det.bearing_rad);
     }
     ++meta.sightings;
     meta.misses = 0;
@@ -342,7 +379,7 @@ void FastSlam<D>::ProposeParticle(int p, const std::vector<Segment>& segments, c
     labels[match.detection] = meta.track_id;
   }
   for (const int i : creations_) {
-    CreateLandmark(&particle, mu, detections[i]);
+    CreateLandmark(&particle, pose, detections[i]);
     labels[i] = creation_ids_[i];
   }
 }
@@ -731,7 +768,7 @@ FilterEstimate FastSlam<D>::Estimate() const {
 }
 
 template <int D>
-int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapFusionRule rule, double gate_probability,
+int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, MapFusionRule rule, double gate_probability,
                                 double too_close_m) {
   if (in.empty()) return 0;
   const double gate = common::ChiSquare2Quantile(gate_probability);
@@ -746,102 +783,121 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, common::MapF
   std::vector<std::uint32_t> new_ids(in.size(), 0);  // one track id per added landmark
   std::vector<MatchCandidate> own;
   for (Particle& particle : particles_) {
-    own.clear();
-    for (int s = 0; s < particle.count; ++s) {
-      const Block& b = *particle.blocks[s / kLanes];
-      const int l = s % kLanes;
-      Eigen::Matrix2d c;
-      c << b.Cov(0, 0, l), b.Cov(0, 1, l), b.Cov(0, 1, l), b.Cov(1, 1, l);
-      own.push_back({{b.Mean(0, l), b.Mean(1, l)},
-                     c,
-                     b.meta[l].landmark_id,
-                     OriginKey(b.meta[l].origin_robot, b.meta[l].origin_track),
-                     D == 2 || b.meta[l].stationary});
-    }
+    OwnCandidates(particle, &own);
     const std::vector<int> match = MatchLandmarks(own, incoming, gate, too_close_m);
     for (std::size_t i = 0; i < in.size(); ++i) {
       const MapLandmark& peer = in[i];
       if (match[i] == kTooClose) continue;
       const bool peer_heading = D > 2 && heading_known(peer.covariance);
       if (match[i] >= 0) {
-        Block* block = MutableBlock(&particle, match[i] / kLanes);
-        const int lane = match[i] % kLanes;
-        const bool fuse_heading = peer_heading && !block->meta[lane].position_only;
-        const int m = fuse_heading ? 3 : 2;
-        Eigen::VectorXd x = block->MeanVector(lane);
-        Eigen::MatrixXd p = block->CovMatrix(lane);
-        if (FuseObservation(&x, &p, peer.mean.head(m), peer.covariance.topLeftCorner(m, m), rule,
-                            fuse_heading ? 2 : -1)) {
-          block->Set(lane, x, p);
-        }
-        LandmarkMeta& meta = block->meta[lane];
-        if (meta.landmark_id < 0) meta.landmark_id = peer.landmark_id;
-        continue;
-      }
-      // Unmatched: a new landmark in this particle, from the peer's estimate, unless it is
-      // already too uncertain to keep (it would leave the map at once).
-      if (Lost(peer.covariance(0, 0), peer.covariance(0, 1), peer.covariance(1, 1))) continue;
-      const int slot = particle.count;
-      if (slot / kLanes == static_cast<int>(particle.blocks.size())) {
-        particle.blocks.push_back(std::make_shared<Block>());
-      }
-      Block* block = MutableBlock(&particle, slot / kLanes);
-      const int lane = slot % kLanes;
-      ++particle.count;
-      StateVector<D> mean = StateVector<D>::Zero();
-      StateMatrix<D> cov = StateMatrix<D>::Zero();
-      mean.template head<2>() = peer.mean.head<2>();
-      cov.template topLeftCorner<2, 2>() = peer.covariance.topLeftCorner<2, 2>();
-      // A landmark the peer takes as static stays static here (constant turn rate): v = w = 0
-      // with no variance, no heading.
-      const bool stationary = D == 5 && peer.motion == LandmarkMotionKind::kStatic;
-      if constexpr (D > 2) {
-        if (stationary) {
-          cov(2, 2) = kUnknownHeadingVar;
-        } else if (peer_heading) {
-          mean(2) = WrapAngle(peer.mean(2));
-          cov.template topLeftCorner<3, 3>() = peer.covariance;
-        }
-      }
-      if constexpr (D == 3) {
-        block->field[Block::kParamV][lane] = peer_heading ? peer.v_mps : 0.0;
-        block->field[Block::kParamW][lane] = peer_heading ? peer.w_radps : 0.0;
-      }
-      if constexpr (D == 5) {
-        if (peer_heading && !stationary) {
-          // The snapshot carries no speed or turn-rate variances: the priors of a new state.
-          const double s_max = MaxLandmarkSpeed(filter_);
-          mean(3) = peer.v_mps;
-          mean(4) = peer.w_radps;
-          cov(3, 3) = 0.25 * s_max * s_max + q_[3];
-          cov(4, 4) = filter_.landmark_turn_rate_prior_sd_radps * filter_.landmark_turn_rate_prior_sd_radps;
-        }
-      }
-      block->Set(lane, mean, cov);
-      std::uint32_t& id = new_ids[i];
-      if (id == 0) id = next_track_id_++;
-      LandmarkMeta& meta = block->meta[lane];
-      meta = LandmarkMeta{};
-      meta.track_id = id;
-      meta.landmark_id = peer.landmark_id;
-      meta.origin_robot = static_cast<std::int16_t>(peer.origin_robot);
-      meta.origin_track = peer.origin_track;
-      meta.first_seen_step = step_;
-      meta.last_seen_step = std::min(step_, peer.last_seen_step);
-      meta.sightings = static_cast<std::uint16_t>(std::max(1, filter_.confirm_sightings));
-      meta.stationary = stationary;
-      meta.position_only = D > 2 && !peer_heading && !stationary;
-      if constexpr (D == 3) {
-        if (peer_heading) {
-          meta.candidate =
-              static_cast<std::int8_t>(NearestKnownKinematics(filter_.known_kinematics, peer.v_mps, peer.w_radps));
-        }
+        FusePeerLandmark(&particle, match[i], peer, peer_heading, rule);
+      } else if (!Lost(peer.covariance(0, 0), peer.covariance(0, 1), peer.covariance(1, 1))) {
+        // Unmatched: a new landmark in this particle, from the peer's estimate, unless it is
+        // already too uncertain to keep (it would leave the map at once).
+        AddPeerLandmark(&particle, peer, peer_heading, &new_ids[i]);
       }
     }
   }
   int added = 0;
   for (const std::uint32_t id : new_ids) added += id != 0 ? 1 : 0;
   return added;
+}
+
+template <int D>
+void FastSlam<D>::OwnCandidates(const Particle& particle, std::vector<MatchCandidate>* own) const {
+  own->clear();
+  for (int s = 0; s < particle.count; ++s) {
+    const Block& b = *particle.blocks[s / kLanes];
+    const int l = s % kLanes;
+    Eigen::Matrix2d c;
+    c << b.Cov(0, 0, l), b.Cov(0, 1, l), b.Cov(0, 1, l), b.Cov(1, 1, l);
+    own->push_back({{b.Mean(0, l), b.Mean(1, l)},
+                    c,
+                    b.meta[l].landmark_id,
+                    OriginKey(b.meta[l].origin_robot, b.meta[l].origin_track),
+                    D == 2 || b.meta[l].stationary});
+  }
+}
+
+template <int D>
+void FastSlam<D>::FusePeerLandmark(Particle* particle, int slot, const MapLandmark& peer, bool peer_heading,
+                                   MapFusionRule rule) {
+  Block* block = MutableBlock(particle, slot / kLanes);
+  const int lane = slot % kLanes;
+  const bool fuse_heading = peer_heading && !block->meta[lane].position_only;
+  const int m = fuse_heading ? 3 : 2;
+  Eigen::VectorXd x = block->MeanVector(lane);
+  Eigen::MatrixXd p = block->CovMatrix(lane);
+  if (FuseObservation(&x, &p, peer.mean.head(m), peer.covariance.topLeftCorner(m, m), rule, fuse_heading ? 2 : -1)) {
+    block->Set(lane, x, p);
+  }
+  LandmarkMeta& meta = block->meta[lane];
+  if (meta.landmark_id < 0) meta.landmark_id = peer.landmark_id;
+}
+
+template <int D>
+void FastSlam<D>::AddPeerLandmark(Particle* particle, const MapLandmark& peer, bool peer_heading,
+                                  std::uint32_t* track_id) {
+  const int slot = particle->count;
+  if (slot / kLanes == static_cast<int>(particle->blocks.size())) {
+    particle->blocks.push_back(std::make_shared<Block>());
+  }
+  Block* block = MutableBlock(particle, slot / kLanes);
+  const int lane = slot % kLanes;
+  ++particle->count;
+  // A landmark the peer takes as static stays static here (constant turn rate): v = w = 0
+  // with no variance, no heading.
+  const bool stationary = D == 5 && peer.motion == LandmarkMotionKind::kStatic;
+  SetPeerState(block, lane, peer, peer_heading, stationary);
+  if (*track_id == 0) *track_id = next_track_id_++;
+  LandmarkMeta& meta = block->meta[lane];
+  meta = LandmarkMeta{};
+  meta.track_id = *track_id;
+  meta.landmark_id = peer.landmark_id;
+  meta.origin_robot = static_cast<std::int16_t>(peer.origin_robot);
+  meta.origin_track = peer.origin_track;
+  meta.first_seen_step = step_;
+  meta.last_seen_step = std::min(step_, peer.last_seen_step);
+  meta.sightings = static_cast<std::uint16_t>(std::max(1, filter_.confirm_sightings));
+  meta.stationary = stationary;
+  meta.position_only = D > 2 && !peer_heading && !stationary;
+  if constexpr (D == 3) {
+    if (peer_heading) {
+      meta.candidate =
+          static_cast<std::int8_t>(NearestKnownKinematics(filter_.known_kinematics, peer.v_mps, peer.w_radps));
+    }
+  }
+}
+
+template <int D>
+void FastSlam<D>::SetPeerState(Block* block, int lane, const MapLandmark& peer, bool peer_heading, bool stationary) {
+  StateVector<D> mean = StateVector<D>::Zero();
+  StateMatrix<D> cov = StateMatrix<D>::Zero();
+  mean.template head<2>() = peer.mean.head<2>();
+  cov.template topLeftCorner<2, 2>() = peer.covariance.topLeftCorner<2, 2>();
+  if constexpr (D > 2) {
+    if (stationary) {
+      cov(2, 2) = kUnknownHeadingVar;
+    } else if (peer_heading) {
+      mean(2) = WrapAngle(peer.mean(2));
+      cov.template topLeftCorner<3, 3>() = peer.covariance;
+    }
+  }
+  if constexpr (D == 3) {
+    block->field[Block::kParamV][lane] = peer_heading ? peer.v_mps : 0.0;
+    block->field[Block::kParamW][lane] = peer_heading ? peer.w_radps : 0.0;
+  }
+  if constexpr (D == 5) {
+    if (peer_heading && !stationary) {
+      // The snapshot carries no speed or turn-rate variances: the priors of a new state.
+      const double s_max = MaxLandmarkSpeed(filter_);
+      mean(3) = peer.v_mps;
+      mean(4) = peer.w_radps;
+      cov(3, 3) = 0.25 * s_max * s_max + q_[3];
+      cov(4, 4) = filter_.landmark_turn_rate_prior_sd_radps * filter_.landmark_turn_rate_prior_sd_radps;
+    }
+  }
+  block->Set(lane, mean, cov);
 }
 
 template <int D>
@@ -886,15 +942,14 @@ template class FastSlam<2>;
 template class FastSlam<3>;
 template class FastSlam<5>;
 
-std::unique_ptr<SlamFilter> CreateFastSlam(const common::ScenarioOptions& options, const std::string& robot_id,
-                                           std::uint64_t seed) {
+std::unique_ptr<SlamFilter> CreateFastSlam(const AgentOptions& options, std::uint64_t seed) {
   switch (options.filter.landmark_kinematics) {
-    case common::LandmarkKinematics::kStatic:
-      return std::make_unique<FastSlam<2>>(options, robot_id, seed);
-    case common::LandmarkKinematics::kKnownCandidates:
-      return std::make_unique<FastSlam<3>>(options, robot_id, seed);
-    case common::LandmarkKinematics::kConstantTurnRate:
-      return std::make_unique<FastSlam<5>>(options, robot_id, seed);
+    case LandmarkKinematics::kStatic:
+      return std::make_unique<FastSlam<2>>(options, seed);
+    case LandmarkKinematics::kKnownCandidates:
+      return std::make_unique<FastSlam<3>>(options, seed);
+    case LandmarkKinematics::kConstantTurnRate:
+      return std::make_unique<FastSlam<5>>(options, seed);
   }
   return nullptr;
 }

@@ -3,17 +3,19 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
-#include "common/config/scenario_options.h"
 #include "common/rng.h"
 #include "common/sensor_types.h"
 #include "robot_agent/filters/association.h"
 #include "robot_agent/filters/landmark_ekf.h"
+#include "robot_agent/filters/map_fusion.h"
 #include "robot_agent/filters/odometry_calibration.h"
 #include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/options/agent_options.h"
 
 namespace mrslam::robot_agent::filters {
 
@@ -80,7 +82,7 @@ namespace mrslam::robot_agent::filters {
 template <int D>
 class FastSlam : public SlamFilter {
  public:
-  FastSlam(const common::ScenarioOptions& options, const std::string& robot_id, std::uint64_t seed);
+  FastSlam(const AgentOptions& options, std::uint64_t seed);
 
   void Process(const common::SensorStep& step) override;
   FilterEstimate Estimate() const override;
@@ -91,7 +93,7 @@ class FastSlam : public SlamFilter {
   // whose position standard deviation exceeds max_landmark_position_sd_m (step 6) and, per
   // particle, the static ones too close to a static own landmark (kTooClose). Blocks
   // are written through MutableBlock, so copy-on-write sharing stays intact.
-  int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
+  int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                      double gate_probability, double too_close_m) override;
   // Cooperative localization: log w_p += log N(nu_p; 0, S_p), nu_p = z - h(pose_p, position),
   // S_p = H C H^T + R, with H = d(range, bearing)/d(position) and R the lidar noise; not applied
@@ -131,9 +133,45 @@ class FastSlam : public SlamFilter {
 
   // Odometry or IMU -> motion segments for this step and their process noise variances.
   void MotionFromStep(const common::SensorStep& step, std::vector<Segment>* segments, Eigen::Vector3d* variance);
+  // A particle's pose proposal N(mu, sigma): the motion prior, refined by each matched detection
+  // (FastSLAM 2.0). From the IMU also the prior speed v_prior, the direction of travel u, the
+  // prior position and the prior's variance along u.
+  struct PoseProposal {
+    common::Pose2 mu;
+    Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
+    double v_prior = 0.0;
+    Eigen::Vector2d u = Eigen::Vector2d::Zero();
+    Eigen::Vector2d prior_xy = Eigen::Vector2d::Zero();
+    double prior_along_var = 0.0;
+  };
+
   // Steps 1-5 for one particle; queues its landmark updates in batch.
   void ProposeParticle(int p, const std::vector<Segment>& segments, const Eigen::Vector3d& var, double dt,
                        const std::vector<Detection>& detections, UpdateBatch<D>* batch);
+  // Step 1: the motion prior (FastSLAM 1.0: the pose sampled from it at once).
+  PoseProposal MotionPrior(const Particle& particle, const std::vector<Segment>& segments, const Eigen::Vector3d& var);
+  // Steps 3-4: associates each detection, weighs particle p by the readings' likelihood and
+  // refines the proposal; fills matches_ and creations_.
+  void AssociateDetections(int p, const std::vector<Detection>& detections, PoseProposal* proposal);
+  // A detection's landmark slot in the particle (-1 for none) and what to do with it.
+  std::pair<int, AssociationKind> Associate(const Particle& particle, const Detection& det,
+                                            const PoseProposal& proposal);
+  // Weighs particle p by a detection's likelihood under its landmark at slot, and (matched,
+  // FastSLAM 2.0) refines the proposal with it.
+  void WeighMatch(int p, const Detection& det, int slot, AssociationKind kind, PoseProposal* proposal);
+  // Samples the particle's pose from the proposal (IMU: then its speed given the pose).
+  void SamplePose(Particle* particle, const PoseProposal& proposal);
+  // Step 5: the matched landmarks' updates at the sampled pose (queued in batch), new landmarks.
+  void UpdateLandmarks(int p, const std::vector<Detection>& detections, UpdateBatch<D>* batch);
+  // MergeLandmarks' steps for one particle: its landmarks as match candidates; a peer landmark
+  // fused into the own one at slot; a new landmark from a peer's (with a new track id, one per
+  // peer landmark across the particles: *track_id, 0 until set), and its state.
+  void OwnCandidates(const Particle& particle, std::vector<MatchCandidate>* own) const;
+  void FusePeerLandmark(Particle* particle, int slot, const MapLandmark& peer, bool peer_heading, MapFusionRule rule);
+  void AddPeerLandmark(Particle* particle, const MapLandmark& peer, bool peer_heading, std::uint32_t* track_id);
+  void SetPeerState(Block* block, int lane, const MapLandmark& peer, bool peer_heading, bool stationary);
+  // The reading noise R = diag(var_r, var_b).
+  Eigen::Matrix2d ReadingCovariance() const { return Eigen::Vector2d(var_r_, var_b_).asDiagonal(); }
   // Step 6 for one particle.
   void CountMisses(int p);
   void Resample(const std::vector<double>& weights);
@@ -159,7 +197,7 @@ class FastSlam : public SlamFilter {
   // Position covariance of the point seen at (r, b) from pose: J R J^T.
   Eigen::Matrix2d PointCovariance(const common::Pose2& pose, const Detection& det) const;
 
-  const common::FilterOptions filter_;
+  const FilterOptions filter_;
   const common::LidarOptions lidar_;
   const common::ImuOptions imu_;
   const common::NoiseOptions noise_;
@@ -167,7 +205,7 @@ class FastSlam : public SlamFilter {
   const double step_dt_s_;
   const AssociationGates gates_;
   const bool fastslam2_;
-  const int robot_index_;  // in the scenario: the provenance of the landmarks it maps
+  const int robot_index_;  // in the team: the provenance of the landmarks it maps
   double var_r_, var_b_;
   double q_[D] = {};                        // landmark process noise per step
   double unknown_heading_inflation_ = 0.0;  // (s_max dt)^2 / 2, for landmarks seen once
@@ -202,7 +240,6 @@ class FastSlam : public SlamFilter {
 
 // The FastSLAM filter for the scenario's landmark kinematics (static: D = 2, known candidates:
 // D = 3, constant turn rate: D = 5).
-std::unique_ptr<SlamFilter> CreateFastSlam(const common::ScenarioOptions& options, const std::string& robot_id,
-                                           std::uint64_t seed);
+std::unique_ptr<SlamFilter> CreateFastSlam(const AgentOptions& options, std::uint64_t seed);
 
 }  // namespace mrslam::robot_agent::filters

@@ -5,11 +5,10 @@
 
 namespace mrslam::robot_agent::filters {
 
-std::unique_ptr<SlamFilter> CreateFilter(const common::ScenarioOptions& options, const std::string& robot_id,
-                                         std::uint64_t seed) {
-  if (options.filter.type == "fastslam") return CreateFastSlam(options, robot_id, seed);
-  if (options.filter.type == "ekf") return CreateEkfSlam(options, robot_id, /*ela=*/false);
-  if (options.filter.type == "ekf_ela") return CreateEkfSlam(options, robot_id, /*ela=*/true);
+std::unique_ptr<SlamFilter> CreateFilter(const AgentOptions& options, std::uint64_t seed) {
+  if (options.filter.type == "fastslam") return CreateFastSlam(options, seed);
+  if (options.filter.type == "ekf") return CreateEkfSlam(options, /*ela=*/false);
+  if (options.filter.type == "ekf_ela") return CreateEkfSlam(options, /*ela=*/true);
   return nullptr;
 }
 

@@ -61,7 +61,7 @@ bool KalmanGain(const Eigen::MatrixXd& p0, const Eigen::MatrixXd& r0, int m, Eig
 }  // namespace
 
 bool FuseObservation(Eigen::VectorXd* x, Eigen::MatrixXd* p, const Eigen::VectorXd& z, const Eigen::MatrixXd& r,
-                     common::MapFusionRule rule, int angle_index) {
+                     MapFusionRule rule, int angle_index) {
   const int n = static_cast<int>(x->size());
   const int m = static_cast<int>(z.size());
   if (m < 1 || m > n || p->rows() != n || p->cols() != n || r.rows() != m || r.cols() != m) return false;
@@ -71,18 +71,18 @@ bool FuseObservation(Eigen::VectorXd* x, Eigen::MatrixXd* p, const Eigen::Vector
 
   Eigen::MatrixXd k, p_new;
   switch (rule) {
-    case common::MapFusionRule::kAverage: {
+    case MapFusionRule::kAverage: {
       k = Eigen::MatrixXd::Zero(n, m);
       k.topRows(m) = 0.5 * Eigen::MatrixXd::Identity(m, m);
       p_new = JosephCovariance(*p, r, k, m);
       break;
     }
-    case common::MapFusionRule::kWeighted: {
+    case MapFusionRule::kWeighted: {
       if (!KalmanGain(*p, r, m, &k)) return false;
       p_new = JosephCovariance(*p, r, k, m);
       break;
     }
-    case common::MapFusionRule::kCovarianceIntersection: {
+    case MapFusionRule::kCovarianceIntersection: {
       // Golden-section search of omega minimizing log det P(omega) (convex in omega).
       const auto fused = [&](double omega, Eigen::MatrixXd* gain, Eigen::MatrixXd* cov) {
         const Eigen::MatrixXd p0 = *p / omega;

@@ -5,8 +5,8 @@
 
 #include <Eigen/Core>
 
-#include "common/config/scenario_options.h"
 #include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/options/agent_options.h"
 
 // Merging a peer's map into an agent's own: a peer landmark moved into the own frame with the
 // transform's uncertainty, matching peer landmarks to own ones, and the fusion rules.
@@ -33,7 +33,7 @@ MapLandmark TransformLandmark(const MapLandmark& in_peer, const common::Pose2& t
 // angle_index (< m) names a component whose difference is wrapped to (-pi, pi] (then re-wrapped
 // in x); -1 for none. Returns false (state unchanged) when the covariances are not usable.
 bool FuseObservation(Eigen::VectorXd* x, Eigen::MatrixXd* p, const Eigen::VectorXd& z, const Eigen::MatrixXd& r,
-                     common::MapFusionRule rule, int angle_index = -1);
+                     MapFusionRule rule, int angle_index = -1);
 
 // A landmark position to match, with its covariance and reported identity (-1 if none).
 struct MatchCandidate {

@@ -5,7 +5,7 @@
 
 namespace mrslam::robot_agent::filters {
 
-OdometryCalibration::OdometryCalibration(const common::FilterOptions& filter)
+OdometryCalibration::OdometryCalibration(const FilterOptions& filter)
     : scale_(filter.odometry_scale), turn_scale_(filter.odometry_turn_scale), lag_s_(filter.odometry_lag_s) {}
 
 std::vector<OdometryCalibration::Motion> OdometryCalibration::Step(const common::Odometry& odometry, double time_s,

@@ -3,8 +3,8 @@
 #include <deque>
 #include <vector>
 
-#include "common/config/scenario_options.h"
 #include "common/sensor_types.h"
+#include "robot_agent/options/agent_options.h"
 
 namespace mrslam::robot_agent::filters {
 
@@ -19,7 +19,7 @@ class OdometryCalibration {
     double v_mps, w_radps, dt_s;
   };
 
-  explicit OdometryCalibration(const common::FilterOptions& filter);
+  explicit OdometryCalibration(const FilterOptions& filter);
 
   // The motion over the step [time_s - step_dt_s, time_s) that ends with `odometry`'s
   // interval: the calibrated commands of that interval, or with a lag those of [time_s - dt -

@@ -6,11 +6,7 @@
 
 namespace mrslam::robot_agent::filters {
 
-common::Pose2 InitialPoseInOwnFrame(const common::RobotOptions& robot) {
-  return common::Compose(common::Inverse(robot.frame_in_world), robot.initial_pose);
-}
-
-int NearestKnownKinematics(const std::vector<common::KnownKinematics>& candidates, double v_mps, double w_radps) {
+int NearestKnownKinematics(const std::vector<KnownKinematics>& candidates, double v_mps, double w_radps) {
   int nearest = -1;
   double best = std::numeric_limits<double>::infinity();
   for (std::size_t c = 0; c < candidates.size(); ++c) {

@@ -7,9 +7,9 @@
 
 #include <Eigen/Core>
 
-#include "common/config/scenario_options.h"
 #include "common/se2.h"
 #include "common/sensor_types.h"
+#include "robot_agent/options/agent_options.h"
 
 namespace mrslam::robot_agent::filters {
 
@@ -84,7 +84,7 @@ class SlamFilter {
   // reported identities decide when both carry one); matched landmarks are fused by rule
   // (map_fusion.h), unmatched ones are added, except static ones within too_close_m of a static
   // own landmark (MatchLandmarks' kTooClose), which are left out. Returns how many were added.
-  virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, common::MapFusionRule rule,
+  virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                              double gate_probability, double too_close_m) = 0;
 
   // Cooperative localization: at the current step this robot detected, at (range_m,
@@ -98,11 +98,8 @@ class SlamFilter {
   }
 };
 
-// The robot's initial pose in its own frame G_i: inverse(frame_in_world) * initial_pose.
-common::Pose2 InitialPoseInOwnFrame(const common::RobotOptions& robot);
-
 // The index of the known kinematics nearest (v, w) (|dv| + |dw|; the first of equals), or -1
 // when there are none: which candidate a landmark reported with (v, w) follows.
-int NearestKnownKinematics(const std::vector<common::KnownKinematics>& candidates, double v_mps, double w_radps);
+int NearestKnownKinematics(const std::vector<KnownKinematics>& candidates, double v_mps, double w_radps);
 
 }  // namespace mrslam::robot_agent::filters

@@ -33,7 +33,7 @@ struct PeerWriters {
 }  // namespace
 
 struct AgentNode::Impl {
-  common::ScenarioOptions scenario;
+  AgentOptions agent;
   AgentNodeOptions options;
   std::unique_ptr<filters::SlamFilter> filter;
   dds::Participant participant;
@@ -63,21 +63,21 @@ struct AgentNode::Impl {
   std::map<std::uint32_t, common::Odometry> odometry;
   std::map<std::uint32_t, msg::StepClock> clock;
 
-  Impl(const common::ScenarioOptions& s, const AgentNodeOptions& o, std::unique_ptr<filters::SlamFilter> f)
-      : scenario(s),
+  Impl(const AgentOptions& a, const AgentNodeOptions& o, std::unique_ptr<filters::SlamFilter> f)
+      : agent(a),
         options(o),
         filter(std::move(f)),
-        participant({o.domain, "robot_agent/" + o.robot_id, o.shared_memory}),
-        lidar_reader(participant, dds::LidarTopic(o.robot_id), &notifier),
-        imu_reader(participant, dds::ImuTopic(o.robot_id), &notifier),
-        odometry_reader(participant, dds::OdometryTopic(o.robot_id), &notifier),
+        participant({o.domain, "robot_agent/" + a.robot_id, o.shared_memory}),
+        lidar_reader(participant, dds::LidarTopic(a.robot_id), &notifier),
+        imu_reader(participant, dds::ImuTopic(a.robot_id), &notifier),
+        odometry_reader(participant, dds::OdometryTopic(a.robot_id), &notifier),
         clock_reader(participant, dds::kClockTopic, &notifier),
-        estimate_writer(participant, dds::EstimateTopic(o.robot_id)),
-        ack_writer(participant, dds::AckTopic(o.robot_id)),
-        relative_inbox(participant, dds::PeerTopic(o.robot_id, "relative"), &notifier),
-        map_inbox(participant, dds::PeerTopic(o.robot_id, "map"), &notifier),
-        moved_inbox(participant, dds::PeerTopic(o.robot_id, "moved"), &notifier),
-        cooperation(s, o.robot_id) {}
+        estimate_writer(participant, dds::EstimateTopic(a.robot_id)),
+        ack_writer(participant, dds::AckTopic(a.robot_id)),
+        relative_inbox(participant, dds::PeerTopic(a.robot_id, "relative"), &notifier),
+        map_inbox(participant, dds::PeerTopic(a.robot_id, "map"), &notifier),
+        moved_inbox(participant, dds::PeerTopic(a.robot_id, "moved"), &notifier),
+        cooperation(a) {}
 
   void Reject(const std::string& why) {
     ++counters.rejected_samples;
@@ -87,7 +87,7 @@ struct AgentNode::Impl {
   // Buffers a sample of a future or current step, or rejects it.
   template <typename T>
   void Buffer(T sample, std::map<std::uint32_t, T>* buffer, int (*sanitize)(T*), const char* what) {
-    if (const auto problem = cooperation::StampProblem(sample.stamp, options.robot_id, next_step); !problem.empty()) {
+    if (const auto problem = cooperation::StampProblem(sample.stamp, agent.robot_id, next_step); !problem.empty()) {
       Reject(std::string(what) + ": " + problem);
       return;
     }
@@ -128,11 +128,11 @@ struct AgentNode::Impl {
   template <typename T>
   void AcceptPeer(T message, std::vector<T> cooperation::PeerInbox::*list) {
     const auto& h = message.header;
-    if (h.recipient != options.robot_id) {
-      Reject("peer message for '" + h.recipient + "' in " + options.robot_id + "'s inbox");
+    if (h.recipient != agent.robot_id) {
+      Reject("peer message for '" + h.recipient + "' in " + agent.robot_id + "'s inbox");
       return;
     }
-    if (scenario.RobotIndex(h.sender) < 0 || h.sender == options.robot_id) {
+    if (agent.TeamIndex(h.sender) < 0 || h.sender == agent.robot_id) {
       Reject("peer message from unknown robot '" + h.sender + "'");
       return;
     }
@@ -147,7 +147,7 @@ struct AgentNode::Impl {
   // True when every peer message the clock of step k announces (sent during step k-1) is here.
   bool PeerMessagesComplete(const msg::StepClock& c) const {
     for (const auto& d : c.peer_deliveries()) {
-      if (d.recipient_id() != options.robot_id) continue;
+      if (d.recipient_id() != agent.robot_id) continue;
       const auto it = received.find({d.sender_id(), c.stamp().step() - 1});
       if ((it == received.end() ? 0U : it->second) < d.count()) return false;
     }
@@ -188,7 +188,7 @@ struct AgentNode::Impl {
 
   void Acknowledge(std::uint32_t step, double time_s, const std::map<std::string, std::uint32_t>& sent = {}) {
     msg::StepAck ack;
-    ack.stamp(dds::ToMsg(common::Stamp{options.robot_id, step, time_s}));
+    ack.stamp(dds::ToMsg(common::Stamp{agent.robot_id, step, time_s}));
     for (const auto& [peer, count] : sent) {
       msg::PeerCount pc;
       pc.peer_id(peer);
@@ -220,8 +220,8 @@ struct AgentNode::Impl {
       spdlog::info(
           "rendezvous with {} at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad), sd ({:.3f} m, {:.3f} m, "
           "{:.4f} rad)",
-          e.peer, e.step, options.robot_id, e.peer, e.t_self_peer.x, e.t_self_peer.y, e.t_self_peer.heading, sd(0),
-          sd(1), sd(2));
+          e.peer, e.step, agent.robot_id, e.peer, e.t_self_peer.x, e.t_self_peer.y, e.t_self_peer.heading, sd(0), sd(1),
+          sd(2));
     }
   }
 
@@ -243,7 +243,7 @@ struct AgentNode::Impl {
       for (std::size_t i = joint_before; i < cooperation.joint_estimates().size(); ++i) {
         const auto& t = cooperation.joint_estimates()[i];
         spdlog::info("joint transform from both histories at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)",
-                     t.step, options.robot_id, t.peer, t.t_self_peer.x, t.t_self_peer.y, t.t_self_peer.heading);
+                     t.step, agent.robot_id, t.peer, t.t_self_peer.x, t.t_self_peer.y, t.t_self_peer.heading);
       }
       inbox.erase(it);
     }
@@ -260,7 +260,7 @@ struct AgentNode::Impl {
     outbox.moved = cooperation.MovedNotices(filter->TakeMovedLandmarks(), k, time_s);
     const auto sent = Send(std::move(outbox));
     LogRendezvous(k, *last);
-    msg::Estimate m = ToMsg(estimate, options.robot_id, scenario.filter.type);
+    msg::Estimate m = ToMsg(estimate, agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
     m.frames_known(cooperation.frames_known());
     m.rejected_samples(static_cast<std::uint32_t>(counters.rejected_samples));
@@ -272,9 +272,9 @@ struct AgentNode::Impl {
   }
 };
 
-AgentNode::AgentNode(const common::ScenarioOptions& scenario, const AgentNodeOptions& options,
+AgentNode::AgentNode(const AgentOptions& agent, const AgentNodeOptions& options,
                      std::unique_ptr<filters::SlamFilter> filter)
-    : impl_(std::make_unique<Impl>(scenario, options, std::move(filter))) {}
+    : impl_(std::make_unique<Impl>(agent, options, std::move(filter))) {}
 
 AgentNode::~AgentNode() = default;
 
@@ -294,7 +294,7 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
     a.notifier.Wait(&seen, milliseconds(5));
   }
   a.Acknowledge(0, 0.0);  // ready: every reader exists
-  spdlog::info("agent {} ready ({} filter)", a.options.robot_id, a.scenario.filter.type);
+  spdlog::info("agent {} ready ({} filter)", a.agent.robot_id, a.agent.filter.type);
   auto last_progress = Clock::now();
   while (!stop) {
     a.Drain();
@@ -306,7 +306,7 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
         // Let the evaluator and the simulator receive the final estimate and ack.
         a.estimate_writer.WaitForAcknowledgments(milliseconds(5000));
         a.ack_writer.WaitForAcknowledgments(milliseconds(5000));
-        spdlog::info("agent {} done: {} steps, {} rejected samples", a.options.robot_id, a.counters.steps_processed,
+        spdlog::info("agent {} done: {} steps, {} rejected samples", a.agent.robot_id, a.counters.steps_processed,
                      a.counters.rejected_samples);
         return true;
       }

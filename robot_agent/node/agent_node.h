@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "common/config/scenario_options.h"
 #include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/options/agent_options.h"
 
 namespace mrslam::robot_agent {
 
@@ -16,8 +16,8 @@ class AgentError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// How the node runs (the agent itself is described by AgentOptions).
 struct AgentNodeOptions {
-  std::string robot_id;
   int domain = 0;
   bool shared_memory = false;
   double timeout_s = 30.0;  // no new step for this long is an error
@@ -37,8 +37,7 @@ struct AgentCounters {
 // ready). Malformed samples are rejected and counted. Owns the participant, endpoints, filter.
 class AgentNode {
  public:
-  AgentNode(const common::ScenarioOptions& scenario, const AgentNodeOptions& options,
-            std::unique_ptr<filters::SlamFilter> filter);
+  AgentNode(const AgentOptions& agent, const AgentNodeOptions& options, std::unique_ptr<filters::SlamFilter> filter);
   ~AgentNode();
   AgentNode(const AgentNode&) = delete;
   AgentNode& operator=(const AgentNode&) = delete;

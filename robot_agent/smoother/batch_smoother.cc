@@ -29,25 +29,6 @@ Eigen::Vector3d Minus(const Pose2& a, const Pose2& b) {
   return {a.x - b.x, a.y - b.y, WrapAngle(a.heading - b.heading)};
 }
 
-// The scenario's landmark kinematics by identity (the oracle's knowledge).
-std::map<int, BatchSmoother::Kinematics> OracleKinematics(const common::ScenarioOptions& options) {
-  if (options.landmark_field.enabled) {
-    throw std::invalid_argument("the reference knows listed landmarks only, not a landmark_field");
-  }
-  std::map<int, BatchSmoother::Kinematics> kinematics;
-  for (const auto& l : options.landmarks) {
-    BatchSmoother::Kinematics k;
-    if (l.motion.model == common::LandmarkMotionModel::kUnicycle) {
-      k = {false, l.motion.v_mps, l.motion.w_radps};
-    } else if (l.motion.model != common::LandmarkMotionModel::kStatic) {
-      throw std::invalid_argument("the reference knows static and unicycle landmarks only (landmark " +
-                                  std::to_string(l.id) + ")");
-    }
-    kinematics[l.id] = k;
-  }
-  return kinematics;
-}
-
 }  // namespace
 
 // Appends the rows of one whitened residual block: r (size n) and its Jacobian blocks
@@ -71,35 +52,11 @@ struct BatchSmoother::Rows {
   }
 };
 
-std::vector<BatchSmoother::RobotStart> BatchSmoother::Starts(const common::ScenarioOptions& options,
-                                                             const std::vector<int>& robot_indices,
-                                                             const std::vector<Pose2>& first_pose_guesses) {
-  if (robot_indices.empty() || first_pose_guesses.size() + 1 != robot_indices.size()) {
-    throw std::invalid_argument("the reference needs one first-pose guess per robot after the first");
-  }
-  std::vector<RobotStart> robots;
-  for (std::size_t r = 0; r < robot_indices.size(); ++r) {
-    const common::RobotOptions& robot = options.robots.at(robot_indices[r]);
-    robots.push_back({robot.id, r == 0 ? filters::InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]});
-  }
-  return robots;
-}
-
-BatchSmoother::BatchSmoother(const common::ScenarioOptions& options, int robot_index)
-    : BatchSmoother(options, std::vector<int>{robot_index}, {}, 0) {}
-
-BatchSmoother::BatchSmoother(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
-                             const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step)
-    : BatchSmoother(options, Starts(options, robot_indices, first_pose_guesses), OracleKinematics(options),
-                    robot_detections_from_step) {
-  replay_ = options.replay.enabled;
-}
-
-BatchSmoother::BatchSmoother(const common::ScenarioOptions& options, const std::vector<RobotStart>& robots,
-                             std::map<int, Kinematics> kinematics, int robot_detections_from_step)
-    : dt_s_(options.run.dt_s),
+BatchSmoother::BatchSmoother(const AgentOptions& options, const std::vector<RobotStart>& robots,
+                             std::map<int, Kinematics> kinematics, int robot_detections_from_step, Unlisted unlisted)
+    : dt_s_(options.dt_s),
       filter_(options.filter),
-      replay_(false),
+      unlisted_(unlisted),
       robot_var_(options.noise.robot_process_var),
       landmark_var_(options.noise.landmark_process_var),
       var_r_(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
@@ -143,7 +100,7 @@ void BatchSmoother::Add(const std::vector<common::SensorStep>& steps) {
 void BatchSmoother::AddLandmarkReading(int r, int t, const common::LandmarkDetection& d) {
   if (d.landmark_id < 0) throw std::invalid_argument("the reference needs detections with identities");
   const auto listed = kinematics_.find(d.landmark_id);
-  const bool known = listed != kinematics_.end() || replay_;
+  const bool known = listed != kinematics_.end() || unlisted_ == Unlisted::kStatic;
   if (!known || !std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad)) return;
   readings_.push_back({t, r, d.landmark_id, -1, d.range_m, d.bearing_rad});
   const Eigen::Vector2d point = common::PointFromRangeBearing(robots_[r].path.back(), {d.range_m, d.bearing_rad});

@@ -7,17 +7,18 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
-#include "common/config/scenario_options.h"
 #include "common/se2.h"
 #include "common/sensor_types.h"
 #include "robot_agent/filters/odometry_calibration.h"
+#include "robot_agent/options/agent_options.h"
 
 namespace mrslam::robot_agent::smoother {
 
 // The maximum a posteriori estimate of several robots' paths and of their landmarks' paths from
 // their odometry and readings, two uses:
 // * the approximately ideal estimator against which the agents are judged (mrslam_batch
-//   --reference, mrslam_batch --transform-reference), with the scenario's oracle knowledge;
+//   --reference, mrslam_batch --transform-reference), with the scenario's oracle knowledge
+//   (scripts/batch/oracle_reference.h builds it so);
 // * an agent's joint estimate of the transform to a peer at a rendezvous (cooperation.h), from
 //   both robots' histories, each reading labelled by the filter's association and each
 //   landmark's kinematics the filter's.
@@ -58,25 +59,18 @@ class BatchSmoother {
     common::Pose2 first_pose;
   };
 
-  // One robot, in its own frame. Throws std::invalid_argument for landmark models other than
-  // static and unicycle, or a landmark_field.
-  BatchSmoother(const common::ScenarioOptions& options, int robot_index);
-  // Several robots (scenario indices; the first anchors the frame). first_pose_guesses: one per
-  // further robot, its first pose in the first robot's frame to start the solver from (any
-  // guess within the solver's reach: only the data decide the result). Detections of each other
-  // count from step robot_detections_from_step on.
-  BatchSmoother(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
-                const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step);
-  // The robots of the set as the oracle constructors start them: the first at its known first
-  // pose in its own frame, the others from first_pose_guesses (one per further robot).
-  static std::vector<RobotStart> Starts(const common::ScenarioOptions& options, const std::vector<int>& robot_indices,
-                                        const std::vector<common::Pose2>& first_pose_guesses);
-  // Without oracle knowledge: the readings' landmark_id fields are labels chosen by the caller,
-  // each landmark's kinematics is given by label (a reading of a label not listed is left out),
-  // and the robots' first poses are given. options supply the step, the noise models and the
-  // odometry calibration only.
-  BatchSmoother(const common::ScenarioOptions& options, const std::vector<RobotStart>& robots,
-                std::map<int, Kinematics> kinematics, int robot_detections_from_step);
+  // A landmark whose label the kinematics do not list: its readings are left out, or it is taken
+  // as static (a data set's landmarks, which all stand still).
+  enum class Unlisted { kLeftOut, kStatic };
+
+  // The readings' landmark_id fields are labels chosen by the caller, each landmark's
+  // kinematics is given by label, and the robots' first poses are given (the first robot's
+  // anchors the frame). options supply the step, the noise models, the odometry calibration and
+  // the outlier gate only. Detections of robots of the set count from step
+  // robot_detections_from_step on.
+  BatchSmoother(const AgentOptions& options, const std::vector<RobotStart>& robots,
+                std::map<int, Kinematics> kinematics, int robot_detections_from_step,
+                Unlisted unlisted = Unlisted::kLeftOut);
 
   // One sensor step per robot of the set, in the set's order, then Solve.
   void Process(const std::vector<common::SensorStep>& steps) {
@@ -159,8 +153,8 @@ class BatchSmoother {
   bool UpdateInliers();
 
   double dt_s_;
-  common::FilterOptions filter_;  // the odometry calibration and the outlier gate
-  bool replay_;                   // a data set's landmarks (all static)
+  FilterOptions filter_;  // the odometry calibration and the outlier gate
+  Unlisted unlisted_;
   bool estimate_calibration_ = false;
   Eigen::Vector3d robot_var_, landmark_var_;
   double var_r_, var_b_;

@@ -47,6 +47,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
@@ -239,7 +240,7 @@ Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
   }
   std::vector<std::unique_ptr<robot_agent::filters::SlamFilter>> filters;
   for (const auto& robot : options.robots) {
-    filters.push_back(robot_agent::filters::CreateFilter(options, robot.id, options.seed));
+    filters.push_back(robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, robot.id), options.seed));
     if (!filters.back()) throw std::runtime_error("filter.type " + job.filter + " is not implemented");
   }
   RunScorer scorer(options);
@@ -523,7 +524,7 @@ int Main(int argc, char** argv) {
   common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);
   if (!options.landmark_field.enabled) throw std::runtime_error(scenario_path + " has no landmark_field");
   options.filter.particles = particles;
-  options.filter.landmark_kinematics = common::LandmarkKinematics::kConstantTurnRate;
+  options.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kConstantTurnRate;
   const std::vector<std::string> filters = Split(filters_text);
   for (const auto& f : filters) {
     if (f != "ekf" && f != "ekf_ela" && f != "fastslam" && f != kOracle) {

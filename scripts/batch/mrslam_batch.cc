@@ -38,12 +38,14 @@
 #include <nlohmann/json.hpp>
 
 #include "common/angles.h"
+#include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "common/progress_line.h"
 #include "common/se2.h"
 #include "robot_agent/filters/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/smoother/batch_smoother.h"
+#include "scripts/batch/oracle_reference.h"
 #include "world_sim/core/world.h"
 #include "world_sim/evaluator/metrics.h"
 #include "world_sim/source/step_source_factory.h"
@@ -96,9 +98,11 @@ class Estimator {
  public:
   Estimator(const common::ScenarioOptions& options, int robot_index, std::uint64_t seed, bool reference) {
     if (reference) {
-      reference_ = std::make_unique<robot_agent::smoother::BatchSmoother>(options, robot_index);
+      reference_ =
+          std::make_unique<robot_agent::smoother::BatchSmoother>(batch::OracleSmoother(options, {robot_index}));
     } else {
-      filter_ = robot_agent::filters::CreateFilter(options, options.robots[robot_index].id, seed);
+      filter_ =
+          robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, options.robots[robot_index].id), seed);
       if (!filter_) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
     }
   }
@@ -143,7 +147,7 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
   std::vector<common::Pose2> dead_reckoning;
   for (std::size_t i = 0; i < n; ++i) {
     estimators.emplace_back(options, static_cast<int>(i), seed, reference);
-    dead_reckoning.push_back(robot_agent::filters::InitialPoseInOwnFrame(options.robots[i]));
+    dead_reckoning.push_back(common::InitialPoseInOwnFrame(options.robots[i]));
   }
   std::vector<std::vector<double>> position(n), heading(n), landmark(n), dr(n);
   for (int k = 0; k < options.run.steps; ++k) {
@@ -223,9 +227,10 @@ std::unique_ptr<robot_agent::smoother::BatchSmoother> MakeReference(const common
                                                                     const std::vector<common::Pose2>& guesses,
                                                                     int from_step) {
   using robot_agent::smoother::BatchSmoother;
-  if (!field_statics) return std::make_unique<BatchSmoother>(options, robots, guesses, from_step);
-  return std::make_unique<BatchSmoother>(options, BatchSmoother::Starts(options, robots, guesses), *field_statics,
-                                         from_step);
+  if (!field_statics)
+    return std::make_unique<BatchSmoother>(batch::OracleSmoother(options, robots, guesses, from_step));
+  return std::make_unique<BatchSmoother>(common::AgentOptionsFor(options, options.robots.at(robots.front()).id),
+                                         batch::OracleStarts(options, robots, guesses), *field_statics, from_step);
 }
 
 PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed, int i, int j) {
@@ -234,7 +239,7 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
   const auto frames = source->Truth().frames;
   const common::Pose2 true_ij = common::Between(frames[i].second, frames[j].second);
   // T(G_i <- G_j) maps j's first pose in G_j to its first pose in G_i.
-  const common::Pose2 start_j = robot_agent::filters::InitialPoseInOwnFrame(options.robots[j]);
+  const common::Pose2 start_j = common::InitialPoseInOwnFrame(options.robots[j]);
   const common::Pose2 guess = common::Compose(common::Compose(true_ij, start_j), {0.3, 0.3, common::kPi / 36});
   const std::optional<Kinematics> statics = FieldStatics(options);
   const auto joint_ref = MakeReference(options, statics, {i, j}, {guess}, options.rendezvous.enable_from_step);
@@ -308,7 +313,7 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   starts.reserve(n);
   for (int i = 0; i < n; ++i) {
     all.push_back(i);
-    starts.push_back(robot_agent::filters::InitialPoseInOwnFrame(options.robots[i]));
+    starts.push_back(common::InitialPoseInOwnFrame(options.robots[i]));
     if (i == 0) continue;
     const common::Pose2 true_0i = common::Between(frames[0].second, frames[i].second);
     guesses.push_back(common::Compose(common::Compose(true_0i, starts[i]), {0.3, 0.3, common::kPi / 36}));

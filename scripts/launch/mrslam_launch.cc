@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/app.h"
+#include "common/config/scenario_flags.h"
 #include "common/config/scenario_options.h"
 #include "common/dds/participant.h"
 #include "common/progress_line.h"

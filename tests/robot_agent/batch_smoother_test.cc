@@ -11,10 +11,12 @@
 #include <Eigen/Cholesky>
 
 #include "common/angles.h"
+#include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
 #include "robot_agent/filters/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
+#include "scripts/batch/oracle_reference.h"
 #include "world_sim/source/step_source_factory.h"
 
 namespace mrslam::robot_agent::smoother {
@@ -36,10 +38,10 @@ struct RunErrors {
 RunErrors RunR1(const common::ScenarioOptions& options, bool with_filter) {
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
   const common::Pose2 frame = source->Truth().frames.at(0).second;
-  BatchSmoother reference(options, 0);
+  BatchSmoother reference = batch::OracleSmoother(options, {0});
   std::unique_ptr<robot_agent::filters::SlamFilter> filter;
-  if (with_filter) filter = robot_agent::filters::CreateFilter(options, "r1", options.seed);
-  common::Pose2 dead_reckoning = robot_agent::filters::InitialPoseInOwnFrame(options.robots[0]);
+  if (with_filter) filter = robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, "r1"), options.seed);
+  common::Pose2 dead_reckoning = common::InitialPoseInOwnFrame(options.robots[0]);
   RunErrors e;
   for (int k = 0; k < options.run.steps; ++k) {
     const common::SensorStep step = source->Step().at(0);
@@ -107,10 +109,10 @@ TEST(BatchSmoother, PlacesASecondRobotFromTheDataNotFromItsGuess) {
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
   const auto frames = source->Truth().frames;
   // r2's first pose in G1: T(G1 <- G2) applied to its first pose in G2.
-  const common::Pose2 truth = common::Compose(common::Between(frames[0].second, frames[1].second),
-                                              robot_agent::filters::InitialPoseInOwnFrame(o.robots[1]));
+  const common::Pose2 truth =
+      common::Compose(common::Between(frames[0].second, frames[1].second), common::InitialPoseInOwnFrame(o.robots[1]));
   const common::Pose2 guess = common::Compose(truth, {0.3, -0.4, 0.17});
-  BatchSmoother reference(o, {0, 1}, {guess}, /*robot_detections_from_step=*/14);
+  BatchSmoother reference = batch::OracleSmoother(o, {0, 1}, {guess}, /*robot_detections_from_step=*/14);
   for (int k = 0; k < 20; ++k) reference.Process(source->Step());
   EXPECT_LT((reference.FirstPose(1).Translation() - truth.Translation()).norm(), 1e-3);
   EXPECT_LT(std::abs(common::WrapAngle(reference.FirstPose(1).heading - truth.heading)), 1e-3);
@@ -127,8 +129,9 @@ TEST(BatchSmoother, FirstPoseCovarianceCoversTheError) {
     const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
     const auto frames = source->Truth().frames;
     const common::Pose2 truth = common::Compose(common::Between(frames[0].second, frames[1].second),
-                                                robot_agent::filters::InitialPoseInOwnFrame(o.robots[1]));
-    BatchSmoother reference(o, {0, 1}, {common::Compose(truth, {0.3, -0.4, 0.1})}, /*robot_detections_from_step=*/14);
+                                                common::InitialPoseInOwnFrame(o.robots[1]));
+    BatchSmoother reference =
+        batch::OracleSmoother(o, {0, 1}, {common::Compose(truth, {0.3, -0.4, 0.1})}, /*robot_detections_from_step=*/14);
     for (int k = 0; k < 20; ++k) reference.Process(source->Step());
     const common::Pose2& x = reference.FirstPose(1);
     const Eigen::Vector3d e(x.x - truth.x, x.y - truth.y, common::WrapAngle(x.heading - truth.heading));
@@ -142,7 +145,7 @@ TEST(BatchSmoother, FirstPoseCovarianceCoversTheError) {
 // r1's whole path as a smoother solved every 15 steps holds it, from the given steps.
 std::vector<common::Pose2> SmoothedPath(const common::ScenarioOptions& o,
                                         const std::vector<common::SensorStep>& steps) {
-  BatchSmoother reference(o, 0);
+  BatchSmoother reference = batch::OracleSmoother(o, {0});
   for (std::size_t k = 0; k < steps.size(); ++k) {
     reference.Add({steps[k]});
     if ((k + 1) % 15 == 0 || k + 1 == steps.size()) reference.Solve();
@@ -188,7 +191,7 @@ TEST(BatchSmoother, EstimatesTheOdometryErrorsTheCalibrationLeaves) {
                      "sensors.lidar.range_noise_sd_m=1e-3", "sensors.lidar.bearing_noise_sd_rad=1e-3",
                      "filter.odometry_scale=0.9", "filter.odometry_turn_scale=1.1"});
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
-  BatchSmoother reference(o, 0);
+  BatchSmoother reference = batch::OracleSmoother(o, {0});
   reference.EstimateOdometryCalibration();
   for (int k = 1; k <= 40; ++k) {
     reference.Add({source->Step().at(0)});
@@ -204,11 +207,11 @@ TEST(BatchSmoother, EstimatesTheOdometryErrorsTheCalibrationLeaves) {
 TEST(BatchSmoother, RejectsWhatItCannotModel) {
   const common::ScenarioOptions field =
       common::LoadScenario(std::string(MRSLAM_TEST_SOURCE_DIR) + "/config/dynamic_world.yaml", {});
-  EXPECT_THROW(BatchSmoother(field, 0), std::invalid_argument);
+  EXPECT_THROW(batch::OracleSmoother(field, {0}), std::invalid_argument);
 
   const common::ScenarioOptions anonymous = common::LoadScenario(kPaperScenario, {});
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(anonymous);
-  BatchSmoother reference(anonymous, 0);
+  BatchSmoother reference = batch::OracleSmoother(anonymous, {0});
   common::SensorStep step;
   do {
     step = source->Step().at(0);

@@ -6,7 +6,7 @@ mrslam_add_test(map_fusion_test
   LIBS mrslam_agent_filters)
 mrslam_add_test(cooperation_test
   SOURCES cooperation_test.cc
-  LIBS mrslam_agent_cooperation)
+  LIBS mrslam_agent_cooperation mrslam_config)
 mrslam_add_test(joint_transform_test
   SOURCES joint_transform_test.cc
-  LIBS mrslam_agent_cooperation mrslam_world_source)
+  LIBS mrslam_agent_cooperation mrslam_config mrslam_world_source)

@@ -15,6 +15,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include "common/config/agent_options_projection.h"
 #include "common/gaussian.h"
 #include "common/rng.h"
 #include "robot_agent/cooperation/rendezvous.h"
@@ -409,8 +410,8 @@ class FakeFilter : public filters::SlamFilter {
  public:
   void Process(const common::SensorStep&) override {}
   filters::FilterEstimate Estimate() const override { return estimate; }
-  int MergeLandmarks(const std::vector<filters::MapLandmark>& in, common::MapFusionRule rule, double gate_probability,
-                     double /*too_close_m*/) override {
+  int MergeLandmarks(const std::vector<filters::MapLandmark>& in, robot_agent::MapFusionRule rule,
+                     double gate_probability, double /*too_close_m*/) override {
     ++merges;
     std::vector<filters::MatchCandidate> own, incoming;
     for (const auto& l : estimate.landmarks)
@@ -480,7 +481,7 @@ class Sim {
       landmarks_.push_back({3.0 * l - 2.0, 4.0 - l});
     }
     for (std::size_t i = 0; i < scenario_.robots.size(); ++i) {
-      agents_.push_back(std::make_unique<Cooperation>(scenario_, scenario_.robots[i].id));
+      agents_.push_back(std::make_unique<Cooperation>(common::AgentOptionsFor(scenario_, scenario_.robots[i].id)));
       filters_.push_back(std::make_unique<FakeFilter>());
       for (std::size_t l = i; l <= i + 1; ++l) {
         filters::MapLandmark m;
@@ -1008,7 +1009,7 @@ TEST_F(HostileInput, MovedNoticesGoOnlyToPeersWhoseFrameIsKnown) {
 // With the FastSLAM filter.
 
 // r1 (a FastSLAM agent) has mapped two static landmarks; r2 is a second robot of the scenario.
-class WithFastSlam : public ::testing::TestWithParam<common::LandmarkKinematics> {
+class WithFastSlam : public ::testing::TestWithParam<robot_agent::LandmarkKinematics> {
  protected:
   void SetUp() override {
     options_ = testing::OneRobotScenario(0.2, 0.0, 100);
@@ -1021,7 +1022,7 @@ class WithFastSlam : public ::testing::TestWithParam<common::LandmarkKinematics>
     r2.frame_in_world = {1.0, 1.0, 0.5};
     options_.robots.push_back(r2);
     options_.rendezvous.enable_from_step = 0;
-    filter_ = filters::CreateFilter(options_, "r1", 3);
+    filter_ = filters::CreateFilter(common::AgentOptionsFor(options_, "r1"), 3);
     testing::TinyWorld world(options_, 3);
     for (int k = 0; k < 8; ++k) filter_->Process(world.Step());
     ASSERT_EQ(filter_->Estimate().landmarks.size(), 2u);
@@ -1086,8 +1087,8 @@ TEST_P(WithFastSlam, MergeFusesMatchedAndAddsNewLandmarks) {
   in[0].covariance = before.landmarks[0].covariance;
   in[1].mean = {-3.0, -2.0, 0.0};  // a landmark this robot never saw
   in[1].covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
-  const int added = filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.0);
-  if (GetParam() == common::LandmarkKinematics::kConstantTurnRate) {
+  const int added = filter_->MergeLandmarks(in, robot_agent::MapFusionRule::kCovarianceIntersection, 0.999, 0.0);
+  if (GetParam() == robot_agent::LandmarkKinematics::kConstantTurnRate) {
     // Each particle gates with its own landmark covariance, which is tight where the particle
     // takes the landmark as static: a particle far out in the mixture may take the first as new.
     EXPECT_GE(added, 1);
@@ -1132,10 +1133,11 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   const Eigen::Vector2d far(-20.0, -20.0), farther(-30.0, 20.0);  // out of view, unmatched
   const Eigen::Vector2d still(20.0, -20.0);                       // the same, static for the peer
   // The first two with the filter's motion model, as a peer of the same scenario reports them.
-  const filters::LandmarkMotionKind kind =
-      GetParam() == common::LandmarkKinematics::kStatic            ? filters::LandmarkMotionKind::kStatic
-      : GetParam() == common::LandmarkKinematics::kKnownCandidates ? filters::LandmarkMotionKind::kUnicycle
-                                                                   : filters::LandmarkMotionKind::kConstantTurnRate;
+  const filters::LandmarkMotionKind kind = GetParam() == robot_agent::LandmarkKinematics::kStatic
+                                               ? filters::LandmarkMotionKind::kStatic
+                                           : GetParam() == robot_agent::LandmarkKinematics::kKnownCandidates
+                                               ? filters::LandmarkMotionKind::kUnicycle
+                                               : filters::LandmarkMotionKind::kConstantTurnRate;
   std::vector<filters::MapLandmark> in(3);
   in[0].mean = {far.x(), far.y(), 0.0};
   in[0].covariance = Eigen::Vector3d(1.9, 1.9, 3.0).asDiagonal();  // sd sqrt(3.8) < 2 m
@@ -1147,7 +1149,7 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   in[2].covariance = Eigen::Vector3d(1.9, 1.9, 0.01).asDiagonal();
   in[2].v_mps = 0.3;  // a static report whose mixture still carries a heading and a speed
   in[2].motion = filters::LandmarkMotionKind::kStatic;
-  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.0), 2);
+  EXPECT_EQ(filter_->MergeLandmarks(in, robot_agent::MapFusionRule::kCovarianceIntersection, 0.999, 0.0), 2);
   EXPECT_EQ(count_near(filter_->Estimate(), far), 1);
   EXPECT_EQ(count_near(filter_->Estimate(), farther), 0);
   EXPECT_EQ(count_near(filter_->Estimate(), still), 1);
@@ -1157,8 +1159,8 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
   // Static landmarks keep their covariance when unseen; a motion model spreads it every step. A
   // constant-turn-rate filter keeps a landmark the peer takes as static static; known
   // candidates have no static model.
-  EXPECT_EQ(count_near(after, far), GetParam() == common::LandmarkKinematics::kStatic ? 1 : 0);
-  EXPECT_EQ(count_near(after, still), GetParam() == common::LandmarkKinematics::kKnownCandidates ? 0 : 1);
+  EXPECT_EQ(count_near(after, far), GetParam() == robot_agent::LandmarkKinematics::kStatic ? 1 : 0);
+  EXPECT_EQ(count_near(after, still), GetParam() == robot_agent::LandmarkKinematics::kKnownCandidates ? 0 : 1);
   for (const auto& l : after.landmarks) {
     const double position_variance = l.covariance(0, 0) + l.covariance(1, 1);
     EXPECT_LE(position_variance, 4.0 + 1e-9);
@@ -1169,7 +1171,7 @@ TEST_P(WithFastSlam, LandmarksBeyondThePositionSdBoundLeaveTheMap) {
 // one it lies next to is left out, not added as a second copy; farther off, it is added. Next to
 // a moving landmark (known candidates here) it is added: moving landmarks pass close by others.
 TEST_P(WithFastSlam, MergeLeavesOutPeerLandmarksTooCloseToOwnOnes) {
-  if (GetParam() == common::LandmarkKinematics::kConstantTurnRate) {
+  if (GetParam() == robot_agent::LandmarkKinematics::kConstantTurnRate) {
     GTEST_SKIP() << "whether the own landmark is static differs from particle to particle";
   }
   const filters::FilterEstimate before = filter_->Estimate();
@@ -1178,14 +1180,14 @@ TEST_P(WithFastSlam, MergeLeavesOutPeerLandmarksTooCloseToOwnOnes) {
   in[0].mean = before.landmarks[0].mean + Eigen::Vector3d(1.0, 0.0, 0.0);
   in[0].covariance = Eigen::Vector3d(1e-4, 1e-4, 3.0).asDiagonal();  // 1 m off, far beyond the gate
   in[0].motion = filters::LandmarkMotionKind::kStatic;
-  const int added = filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 1.5);
-  if (GetParam() == common::LandmarkKinematics::kKnownCandidates) {
+  const int added = filter_->MergeLandmarks(in, robot_agent::MapFusionRule::kCovarianceIntersection, 0.999, 1.5);
+  if (GetParam() == robot_agent::LandmarkKinematics::kKnownCandidates) {
     EXPECT_EQ(added, 1);
     return;
   }
   EXPECT_EQ(added, 0);
   ExpectSameEstimate(filter_->Estimate(), before);
-  EXPECT_EQ(filter_->MergeLandmarks(in, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.5), 1);
+  EXPECT_EQ(filter_->MergeLandmarks(in, robot_agent::MapFusionRule::kCovarianceIntersection, 0.999, 0.5), 1);
   EXPECT_EQ(filter_->Estimate().landmarks.size(), before.landmarks.size() + 1);
 }
 
@@ -1195,14 +1197,14 @@ TEST_P(WithFastSlam, MergeKeepsCopyOnWriteSharing) {
   std::vector<filters::MapLandmark> in(1);
   in[0].mean = {-3.0, -2.0, 0.0};
   in[0].covariance = Eigen::Vector3d(0.01, 0.01, 3.0).asDiagonal();
-  filter_->MergeLandmarks(in, common::MapFusionRule::kWeighted, 0.999, 0.0);
+  filter_->MergeLandmarks(in, robot_agent::MapFusionRule::kWeighted, 0.999, 0.0);
   // Blocks are never shared by two particles after one of them wrote (each particle's storage
   // addresses are its own where it wrote); every particle holds the added landmark.
   for (int p = 0; p < fast->NumParticles(); ++p) EXPECT_EQ(fast->ParticleLandmarkCount(p), 3);
 }
 
 TEST_P(WithFastSlam, RejectedSnapshotsLeaveTheEstimateUnchanged) {
-  Cooperation agent(options_, "r1");
+  Cooperation agent(common::AgentOptionsFor(options_, "r1"));
   Meet(&agent);
   const filters::FilterEstimate before = filter_->Estimate();
   MapSnapshot good;
@@ -1249,9 +1251,9 @@ TEST_P(WithFastSlam, ObservingAKnownRobotReweightsParticles) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinematics, WithFastSlam,
-                         ::testing::Values(common::LandmarkKinematics::kStatic,
-                                           common::LandmarkKinematics::kKnownCandidates,
-                                           common::LandmarkKinematics::kConstantTurnRate));
+                         ::testing::Values(robot_agent::LandmarkKinematics::kStatic,
+                                           robot_agent::LandmarkKinematics::kKnownCandidates,
+                                           robot_agent::LandmarkKinematics::kConstantTurnRate));
 
 // ---------------------------------------------------------------------------------------------
 // The scenario section.
@@ -1259,7 +1261,7 @@ INSTANTIATE_TEST_SUITE_P(Kinematics, WithFastSlam,
 TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
   const char* base = "name: t\nrun: {steps: 10, dt_s: 0.1}\nrobots: [{id: r1, pose: [0, 0, 0]}]\n";
   common::ScenarioOptions o = common::CreateScenarioOptions(YAML::Load(base));
-  EXPECT_EQ(o.cooperation.map_fusion, common::MapFusionRule::kCovarianceIntersection);
+  EXPECT_EQ(o.cooperation.map_fusion, robot_agent::MapFusionRule::kCovarianceIntersection);
   EXPECT_TRUE(o.cooperation.merge_maps);
   EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 256);
   EXPECT_EQ(o.cooperation.min_seen_span_steps, 6);
@@ -1268,7 +1270,7 @@ TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
                                                "cooperation: {map_fusion: average, merge_maps: false, "
                                                "max_snapshot_landmarks: 10, cooperative_localization: true, "
                                                "min_seen_span_steps: 0, merge_min_separation_m: 0}\n"));
-  EXPECT_EQ(o.cooperation.map_fusion, common::MapFusionRule::kAverage);
+  EXPECT_EQ(o.cooperation.map_fusion, robot_agent::MapFusionRule::kAverage);
   EXPECT_FALSE(o.cooperation.merge_maps);
   EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 10);
   EXPECT_TRUE(o.cooperation.cooperative_localization);

@@ -2,6 +2,7 @@
 // update keeping the covariance symmetric positive definite (seeded property test), and the
 // filter on a small simulated world (consistency, association, map merging).
 #include "robot_agent/filters/ekf_slam.h"
+#include "common/config/agent_options_projection.h"
 #include "robot_agent/filters/filter_factory.h"
 
 #include <cmath>
@@ -61,7 +62,7 @@ TEST(EkfSlamTest, PredictionCovarianceMatchesNumericJacobians) {
   o.sensors.odometry.v_noise_sd_mps = 0.05;
   o.sensors.odometry.w_noise_sd_radps = 0.02;
   o.robots[0].initial_pose = {1.0, -2.0, 0.4};
-  EkfSlam ekf(o, "r1", /*ela=*/false);
+  EkfSlam ekf(common::AgentOptionsFor(o, "r1"), /*ela=*/false);
   common::SensorStep step;
   step.lidar.stamp.step = 1;
   step.odometry.segments.push_back({0.0, 1.0, 0.7, 0.3});
@@ -160,7 +161,7 @@ TEST(EkfSlamTest, MapsStaticLandmarksOnceAndStaysConsistent) {
   const int seeds = 5;
   for (int seed = 1; seed <= seeds; ++seed) {
     o.filter.type = "ekf";
-    std::unique_ptr<SlamFilter> filter = CreateFilter(o, "r1", seed);
+    std::unique_ptr<SlamFilter> filter = CreateFilter(common::AgentOptionsFor(o, "r1"), seed);
     ASSERT_NE(filter, nullptr);
     auto* ekf = dynamic_cast<EkfSlam*>(filter.get());
     ASSERT_NE(ekf, nullptr);
@@ -188,9 +189,9 @@ TEST(EkfSlamTest, MergeFusesKnownLandmarksAndAddsNewOnes) {
   common::ScenarioOptions o = OneRobotScenario(0.3, 0.1, 1);
   AddLandmark(&o, 1, {2.0, 1.0, 0.0});
   AddLandmark(&o, 2, {-1.0, 3.0, 0.0});
-  for (const auto rule : {common::MapFusionRule::kWeighted, common::MapFusionRule::kCovarianceIntersection,
-                          common::MapFusionRule::kAverage}) {
-    EkfSlam ekf(o, "r1", /*ela=*/false);
+  for (const auto rule : {robot_agent::MapFusionRule::kWeighted, robot_agent::MapFusionRule::kCovarianceIntersection,
+                          robot_agent::MapFusionRule::kAverage}) {
+    EkfSlam ekf(common::AgentOptionsFor(o, "r1"), /*ela=*/false);
     TinyWorld world(o, 3);
     for (int k = 0; k < 10; ++k) ekf.Process(world.Step());
     ASSERT_EQ(ekf.NumMapped(), 2);
@@ -213,7 +214,7 @@ TEST(EkfSlamTest, MergeFusesKnownLandmarksAndAddsNewOnes) {
 TEST(EkfSlamTest, MergeLeavesOutLandmarksTooCloseToMappedOnes) {
   common::ScenarioOptions o = OneRobotScenario(0.3, 0.1, 1);
   AddLandmark(&o, 1, {2.0, 1.0, 0.0});
-  EkfSlam ekf(o, "r1", /*ela=*/false);
+  EkfSlam ekf(common::AgentOptionsFor(o, "r1"), /*ela=*/false);
   TinyWorld world(o, 3);
   for (int k = 0; k < 10; ++k) ekf.Process(world.Step());
   ASSERT_EQ(ekf.NumMapped(), 1);
@@ -221,10 +222,10 @@ TEST(EkfSlamTest, MergeLeavesOutLandmarksTooCloseToMappedOnes) {
   near.mean = ekf.Estimate().landmarks[0].mean + Eigen::Vector3d(1.0, 0.0, 0.0);
   near.covariance = 1e-4 * Eigen::Matrix3d::Identity();
   const Eigen::MatrixXd p_before = ekf.Covariance();
-  EXPECT_EQ(ekf.MergeLandmarks({near}, common::MapFusionRule::kCovarianceIntersection, 0.999, 1.5), 0);
+  EXPECT_EQ(ekf.MergeLandmarks({near}, robot_agent::MapFusionRule::kCovarianceIntersection, 0.999, 1.5), 0);
   EXPECT_EQ(ekf.NumMapped(), 1);
   EXPECT_EQ(ekf.Covariance(), p_before);
-  EXPECT_EQ(ekf.MergeLandmarks({near}, common::MapFusionRule::kCovarianceIntersection, 0.999, 0.5), 1);
+  EXPECT_EQ(ekf.MergeLandmarks({near}, robot_agent::MapFusionRule::kCovarianceIntersection, 0.999, 0.5), 1);
   EXPECT_EQ(ekf.NumMapped(), 2);
 }
 

@@ -7,6 +7,7 @@
 // a static world (dynamic_world with moving_fraction 0: under 1 % of the observations flagged,
 // landmark RMSE at most 5 % above the plain EKF's, robot RMSE within 5 % of it).
 #include "robot_agent/filters/ela.h"
+#include "common/config/agent_options_projection.h"
 
 #include <algorithm>
 #include <cmath>
@@ -242,7 +243,7 @@ common::ScenarioOptions JumperScenario() {
 // others, and once it has stayed put for ela_return_after_frames frames it is back in the map,
 // near its new place.
 TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
-  EkfSlam ekf(JumperScenario(), "r1", /*ela=*/true);
+  EkfSlam ekf(common::AgentOptionsFor(JumperScenario(), "r1"), /*ela=*/true);
   const Eigen::Vector2d before(2.0, 2.0), jumped = before + Eigen::Vector2d(1.5, 0.0);
   const JumperRun run = RunJumper(&ekf, JumpThenCreep(1.5, 0.0), [&](int k, EkfSlam& f) {
     if (k == 29) {
@@ -281,7 +282,7 @@ TEST(ElaTest, FilterDropsJumpingLandmarkAndTakesItBackWhenItStays) {
 // (0.5 m), but its sightings show the velocity, so it never comes back into the map, and the
 // pose stays as good as with the still jumper.
 TEST(ElaTest, FilterKeepsACreepingLandmarkOutOfTheMap) {
-  EkfSlam ekf(JumperScenario(), "r1", /*ela=*/true);
+  EkfSlam ekf(common::AgentOptionsFor(JumperScenario(), "r1"), /*ela=*/true);
   int mapped_after_jump = 0;
   const JumperRun run = RunJumper(&ekf, JumpThenCreep(1.5, 0.1), [&](int k, EkfSlam& f) {
     if (k >= 30) mapped_after_jump = std::max(mapped_after_jump, f.NumMapped());
@@ -298,7 +299,7 @@ TEST(ElaTest, DriftTestTakesACreepingMapLandmarkOut) {
   auto first_flag = [](int drift_window, double* pose_error) {
     common::ScenarioOptions o = JumperScenario();
     o.filter.ela_drift_window_frames = drift_window;
-    EkfSlam ekf(o, "r1", /*ela=*/true);
+    EkfSlam ekf(common::AgentOptionsFor(o, "r1"), /*ela=*/true);
     int flagged_at = 0;
     const JumperRun run = RunJumper(&ekf, JumpThenCreep(0.0, 0.03), [&](int k, EkfSlam& f) {
       if (flagged_at == 0 && f.FlaggedObservations() > 0) flagged_at = k;
@@ -323,7 +324,7 @@ TEST(ElaTest, YoungLandmarksDoNotCorrectThePoseWhereLandmarksMove) {
     common::ScenarioOptions o = JumperScenario();
     o.filter.ela_young_sightings = young;
     o.filter.ela_young_creep_share = 0.0;
-    EkfSlam ekf(o, "r1", /*ela=*/true);
+    EkfSlam ekf(common::AgentOptionsFor(o, "r1"), /*ela=*/true);
     std::vector<double> traces;
     RunJumper(&ekf, JumpThenCreep(0.0, 0.0),
               [&](int, EkfSlam& f) { traces.push_back(f.Covariance().topLeftCorner<3, 3>().trace()); });
@@ -348,7 +349,7 @@ TEST(ElaTest, OneFrameOutsideItsAreaIsNotYetAMove) {
     common::ScenarioOptions o = JumperScenario();
     o.filter.ela_outside_frames_to_move = frames;
     o.filter.gate_probability = 0.999999;
-    EkfSlam ekf(o, "r1", /*ela=*/true);
+    EkfSlam ekf(common::AgentOptionsFor(o, "r1"), /*ela=*/true);
     int min_mapped = 6;
     std::size_t moves = 0;
     RunJumper(&ekf, spike, [&](int k, EkfSlam& f) {
@@ -381,7 +382,8 @@ StaticRun RunStatic(const common::ScenarioOptions& base, const std::string& filt
   o.seed = seed;
   world_sim::World world(o);
   std::vector<std::unique_ptr<EkfSlam>> filters;
-  for (const auto& r : o.robots) filters.push_back(std::make_unique<EkfSlam>(o, r.id, filter == "ekf_ela"));
+  for (const auto& r : o.robots)
+    filters.push_back(std::make_unique<EkfSlam>(common::AgentOptionsFor(o, r.id), filter == "ekf_ela"));
   std::vector<double> sums(o.robots.size(), 0.0), position_sq(o.robots.size(), 0.0);
   std::vector<int> frames(o.robots.size(), 0);
   for (int k = 0; k < o.run.steps; ++k) {

@@ -11,6 +11,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "common/config/agent_options_projection.h"
 #include "common/rng.h"
 #include "robot_agent/filters/fastslam.h"
 #include "robot_agent/filters/landmark_ekf.h"
@@ -53,7 +54,7 @@ void BM_LandmarkUpdates(benchmark::State& state) {
 }
 BENCHMARK(BM_LandmarkUpdates)->ArgsProduct({{100, 1000, 10000}, {2, 50, 500}})->Unit(benchmark::kMillisecond);
 
-common::ScenarioOptions RingScenario(common::LandmarkKinematics kinematics) {
+common::ScenarioOptions RingScenario(robot_agent::LandmarkKinematics kinematics) {
   common::ScenarioOptions o = testing::OneRobotScenario(1.0, 0.1, 1000);
   o.run.dt_s = 0.5;
   o.robots[0].initial_pose = {10.0, 0.0, common::kPi / 2};
@@ -67,10 +68,10 @@ common::ScenarioOptions RingScenario(common::LandmarkKinematics kinematics) {
 }
 
 template <int D>
-void BM_FullStep(benchmark::State& state, common::LandmarkKinematics kinematics) {
+void BM_FullStep(benchmark::State& state, robot_agent::LandmarkKinematics kinematics) {
   const common::ScenarioOptions o = RingScenario(kinematics);
   testing::TinyWorld world(o, 1);
-  FastSlam<D> filter(o, "r1", 1);
+  FastSlam<D> filter(common::AgentOptionsFor(o, "r1"), 1);
   // One lap (126 steps) maps every landmark; then the steps to time are prepared in advance.
   for (int k = 0; k < 130; ++k) filter.Process(world.Step());
   std::vector<common::SensorStep> steps;
@@ -94,9 +95,9 @@ void BM_FullStep(benchmark::State& state, common::LandmarkKinematics kinematics)
   state.counters["steps_per_second"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
-void BM_FullStepStatic(benchmark::State& state) { BM_FullStep<2>(state, common::LandmarkKinematics::kStatic); }
+void BM_FullStepStatic(benchmark::State& state) { BM_FullStep<2>(state, robot_agent::LandmarkKinematics::kStatic); }
 void BM_FullStepConstantTurnRate(benchmark::State& state) {
-  BM_FullStep<5>(state, common::LandmarkKinematics::kConstantTurnRate);
+  BM_FullStep<5>(state, robot_agent::LandmarkKinematics::kConstantTurnRate);
 }
 BENCHMARK(BM_FullStepStatic)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FullStepConstantTurnRate)->Unit(benchmark::kMillisecond);

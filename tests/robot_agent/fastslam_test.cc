@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "common/angles.h"
+#include "common/config/agent_options_projection.h"
 #include "robot_agent/filters/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "tests/robot_agent/tiny_world.h"
@@ -42,7 +43,7 @@ common::ScenarioOptions StaticScenario(int particles) {
     const double a = i * common::kPi / 4.0;
     AddLandmark(&o, i + 1, {(i % 2 ? 3.0 : 7.0) * std::cos(a), (i % 2 ? 3.0 : 7.0) * std::sin(a), 0.0});
   }
-  o.filter.landmark_kinematics = common::LandmarkKinematics::kStatic;
+  o.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kStatic;
   return o;
 }
 
@@ -60,7 +61,7 @@ TEST(FastSlam, StaticLandmarksPoseIsConsistent) {
   for (int seed = 1; seed <= kSeeds; ++seed) {
     const common::ScenarioOptions o = StaticScenario(1000);
     TinyWorld world(o, seed);
-    const auto filter = CreateFilter(o, "r1", seed);
+    const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), seed);
     for (int k = 0; k < kSteps; ++k) {
       filter->Process(world.Step());
       anees[k] += PoseNees(filter->Estimate(), world.robot()) / kSeeds;
@@ -87,7 +88,7 @@ TEST(FastSlam, MotionPriorCarriesTheOdometryNoise) {
   o.sensors.odometry.w_noise_sd_radps = 0.1;
   o.noise.robot_process_var = Eigen::Vector3d::Constant(1e-4);
   TinyWorld world(o, 1);
-  const auto filter = CreateFilter(o, "r1", 1);
+  const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), 1);
   filter->Process(world.Step());
   // From (0, 0, 0) with h = w dt = 0.4: G = [dt cos h, -v dt^2 sin h; dt sin h, v dt^2 cos h; 0, dt].
   const double h = 0.4;
@@ -110,7 +111,7 @@ TEST(FastSlam, MotionPriorCarriesTheOdometryNoise) {
 TEST(FastSlam, StaticMapConvergesToTheLandmarks) {
   const common::ScenarioOptions o = StaticScenario(200);
   TinyWorld world(o, 7);
-  const auto filter = CreateFilter(o, "r1", 7);
+  const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), 7);
   for (int k = 0; k < 40; ++k) filter->Process(world.Step());
   const FilterEstimate e = filter->Estimate();
   ASSERT_EQ(e.landmarks.size(), 8u);
@@ -135,7 +136,7 @@ common::ScenarioOptions PaperAScenario() {
   o.noise.robot_process_var = o.noise.landmark_process_var = Eigen::Vector3d::Constant(0.001);
   AddLandmark(&o, 1, {-1.5, -1.0, 1.22}, 0.4, 0.2);
   AddLandmark(&o, 2, {2.5, -1.5, 2.09}, 0.6, 0.2);
-  o.filter.landmark_kinematics = common::LandmarkKinematics::kKnownCandidates;
+  o.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kKnownCandidates;
   o.filter.known_kinematics = {{0.4, 0.2}, {0.6, 0.2}};
   return o;
 }
@@ -143,7 +144,7 @@ common::ScenarioOptions PaperAScenario() {
 // Position RMSE of a filter over the first `steps` steps of a TinyWorld run.
 double FilterPositionRmse(const common::ScenarioOptions& o, std::uint64_t seed, int steps) {
   TinyWorld world(o, seed);
-  const auto filter = CreateFilter(o, "r1", seed);
+  const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), seed);
   double sq = 0.0;
   for (int k = 0; k < steps; ++k) {
     filter->Process(world.Step());
@@ -163,7 +164,7 @@ TEST(FastSlam, ImuMotionSourceStaysWithTheLandmarks) {
   double imu_sum = 0.0, odometry_sum = 0.0, dead_reckoning_sum = 0.0;
   for (int seed = 1; seed <= kSeeds; ++seed) {
     common::ScenarioOptions o = PaperAScenario();
-    o.filter.motion_source = common::MotionSource::kImu;
+    o.filter.motion_source = robot_agent::MotionSource::kImu;
     o.sensors.imu = {true, 1, 0.01, 0.05};
     imu_sum += FilterPositionRmse(o, seed, kSteps);
     odometry_sum += FilterPositionRmse(PaperAScenario(), seed, kSteps);
@@ -194,9 +195,9 @@ TEST(FastSlam, ConstantTurnRateEstimatesSpeedAndTurnRate) {
     AddLandmark(&o, 1, {0.0, 2.0, 0.0}, kV, kW);
     AddLandmark(&o, 2, {3.0, -3.0, 0.0});
     AddLandmark(&o, 3, {-3.0, 3.0, 0.0});
-    o.filter.landmark_kinematics = common::LandmarkKinematics::kConstantTurnRate;
+    o.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kConstantTurnRate;
     TinyWorld world(o, seed);
-    const auto filter = CreateFilter(o, "r1", seed);
+    const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), seed);
     for (int k = 0; k < 60; ++k) filter->Process(world.Step());
     const FilterEstimate e = filter->Estimate();
     ASSERT_EQ(e.landmarks.size(), 3u) << "seed " << seed;
@@ -229,11 +230,11 @@ TEST(FastSlam, StaticHypothesisKeepsAnUnseenStaticLandmarkWhereItWas) {
     o.sensors.lidar.max_range_m = 6.0;
     AddLandmark(&o, 1, {2.0, 1.0, 0.0});
     AddLandmark(&o, 2, {25.0, 1.0, 0.0});  // keeps the robot company later
-    o.filter.landmark_kinematics = common::LandmarkKinematics::kConstantTurnRate;
+    o.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kConstantTurnRate;
     o.filter.landmark_static_prior = prior;
     o.filter.max_landmark_position_sd_m = std::numeric_limits<double>::infinity();
     TinyWorld world(o, 3);
-    const auto filter = CreateFilter(o, "r1", 3);
+    const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), 3);
     for (int k = 0; k < 50; ++k) filter->Process(world.Step());  // 25 m on: out of range since step 16
     const FilterEstimate e = filter->Estimate();
     const MapLandmark* first = Nearest(e, world.landmarks()[0].Translation());
@@ -256,9 +257,9 @@ TEST(FastSlam, AssociationKeepsCrossingLandmarksApart) {
     AddLandmark(&o, 1, {-3.0, 0.0, 0.0}, 0.5, 0.0);
     AddLandmark(&o, 2, {0.0, -3.0, common::kPi / 2}, 0.5, 0.0);
     AddLandmark(&o, 3, {-6.0, -6.0, 0.0});
-    o.filter.landmark_kinematics = common::LandmarkKinematics::kConstantTurnRate;
+    o.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kConstantTurnRate;
     TinyWorld world(o, seed);
-    const auto filter = CreateFilter(o, "r1", seed);
+    const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), seed);
     std::uint32_t track[2] = {0, 0};
     for (int k = 1; k <= 26; ++k) {
       filter->Process(world.Step());
@@ -288,10 +289,10 @@ TEST(FastSlam, KnownCandidatesSettleOnTheRightModel) {
     o.robots[0].initial_pose = {0.0, -5.0, 0.0};
     AddLandmark(&o, 1, {-1.5, -1.0, 1.22}, 0.4, 0.2);
     AddLandmark(&o, 2, {2.5, -1.5, 2.09}, 0.6, 0.2);
-    o.filter.landmark_kinematics = common::LandmarkKinematics::kKnownCandidates;
+    o.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kKnownCandidates;
     o.filter.known_kinematics = {{0.4, 0.2}, {0.6, 0.2}};
     TinyWorld world(o, seed);
-    const auto filter = CreateFilter(o, "r1", seed);
+    const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), seed);
     for (int k = 0; k < 40; ++k) filter->Process(world.Step());
     const FilterEstimate e = filter->Estimate();
     ASSERT_EQ(e.landmarks.size(), 2u) << "seed " << seed;
@@ -304,7 +305,7 @@ TEST(FastSlam, ReportedIdentitiesAreUsed) {
   common::ScenarioOptions o = StaticScenario(100);
   o.sensors.lidar.report_identity = true;
   TinyWorld world(o, 3);
-  const auto filter = CreateFilter(o, "r1", 3);
+  const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), 3);
   for (int k = 0; k < 40; ++k) filter->Process(world.Step());
   const FilterEstimate e = filter->Estimate();
   ASSERT_EQ(e.landmarks.size(), 8u);
@@ -332,11 +333,11 @@ bool SameEstimate(const FilterEstimate& a, const FilterEstimate& b) {
 // Same seed, same numbers; and the order of the detections in a scan changes nothing.
 TEST(FastSlam, SameSeedSameNumbersWhateverTheScanOrder) {
   common::ScenarioOptions o = StaticScenario(100);
-  o.filter.landmark_kinematics = common::LandmarkKinematics::kConstantTurnRate;
+  o.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kConstantTurnRate;
   TinyWorld world(o, 5);
-  const auto a = CreateFilter(o, "r1", 5);
-  const auto b = CreateFilter(o, "r1", 5);
-  const auto c = CreateFilter(o, "r1", 6);
+  const auto a = CreateFilter(common::AgentOptionsFor(o, "r1"), 5);
+  const auto b = CreateFilter(common::AgentOptionsFor(o, "r1"), 5);
+  const auto c = CreateFilter(common::AgentOptionsFor(o, "r1"), 6);
   bool differs_with_other_seed = false;
   for (int k = 0; k < 30; ++k) {
     common::SensorStep step = world.Step();
@@ -355,7 +356,7 @@ TEST(FastSlam, ResamplingSharesLandmarkStorage) {
   common::ScenarioOptions o = StaticScenario(200);
   o.filter.resample_every_step = true;
   TinyWorld world(o, 9);
-  FastSlam<2> filter(o, "r1", 9);
+  FastSlam<2> filter(common::AgentOptionsFor(o, "r1"), 9);
   for (int k = 0; k < 10; ++k) filter.Process(world.Step());
   std::set<const void*> unique;
   int total = 0;
@@ -373,25 +374,14 @@ TEST(FastSlam, ResamplingSharesLandmarkStorage) {
   }
 }
 
-TEST(SlamFilter, InitialPoseInOwnFrameComposesTheFrameInverse) {
-  common::RobotOptions r;
-  r.frame_in_world = {0.347, 2.209, -0.6194};
-  r.initial_pose = {0.0, 0.0, 2.09};
-  const common::Pose2 p = InitialPoseInOwnFrame(r);
-  const common::Pose2 back = common::Compose(r.frame_in_world, p);
-  EXPECT_NEAR(back.x, 0.0, 1e-12);
-  EXPECT_NEAR(back.y, 0.0, 1e-12);
-  EXPECT_NEAR(back.heading, 2.09, 1e-12);
-}
-
 TEST(SlamFilter, CreatesEveryKnownFilterAndNothingElse) {
   common::ScenarioOptions o = StaticScenario(10);
   for (const char* type : {"fastslam", "ekf", "ekf_ela"}) {
     o.filter.type = type;
-    EXPECT_NE(CreateFilter(o, "r1", 1), nullptr) << type;
+    EXPECT_NE(CreateFilter(common::AgentOptionsFor(o, "r1"), 1), nullptr) << type;
   }
   o.filter.type = "particle_smoother";
-  EXPECT_EQ(CreateFilter(o, "r1", 1), nullptr);
+  EXPECT_EQ(CreateFilter(common::AgentOptionsFor(o, "r1"), 1), nullptr);
 }
 
 }  // namespace

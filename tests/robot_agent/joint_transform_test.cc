@@ -8,6 +8,7 @@
 #include <Eigen/Cholesky>
 
 #include "common/angles.h"
+#include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
 #include "robot_agent/cooperation/cooperation.h"
@@ -37,9 +38,10 @@ Outcome RunToTheFirstJointEstimate(const common::ScenarioOptions& o) {
   Outcome out;
   out.truth = common::Between(frames[0].second, frames[1].second);
   const std::string ids[2] = {o.robots[0].id, o.robots[1].id};
-  std::unique_ptr<filters::SlamFilter> slams[2] = {filters::CreateFilter(o, ids[0], o.seed),
-                                                   filters::CreateFilter(o, ids[1], o.seed)};
-  Cooperation agents[2] = {Cooperation(o, ids[0]), Cooperation(o, ids[1])};
+  std::unique_ptr<filters::SlamFilter> slams[2] = {filters::CreateFilter(common::AgentOptionsFor(o, ids[0]), o.seed),
+                                                   filters::CreateFilter(common::AgentOptionsFor(o, ids[1]), o.seed)};
+  Cooperation agents[2] = {Cooperation(common::AgentOptionsFor(o, ids[0])),
+                           Cooperation(common::AgentOptionsFor(o, ids[1]))};
   PeerInbox inbox[2];
   for (int k = 0; k < o.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();

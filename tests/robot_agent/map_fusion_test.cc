@@ -13,8 +13,8 @@
 namespace mrslam::robot_agent::filters {
 namespace {
 
-using common::MapFusionRule;
 using common::Pose2;
+using robot_agent::MapFusionRule;
 
 // A random symmetric positive-definite n x n matrix with eigenvalues in [lo, hi].
 Eigen::MatrixXd RandomSpd(common::Rng* rng, int n, double lo, double hi) {

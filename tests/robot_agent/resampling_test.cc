@@ -84,7 +84,7 @@ TEST(SystematicResample, CopiesFollowWeights) {
 }
 
 TEST(AssociationGates, MahalanobisUsesChiSquareQuantiles) {
-  common::FilterOptions f;
+  robot_agent::FilterOptions f;
   f.gate_probability = 0.99;
   f.new_landmark_probability = 0.999;
   const AssociationGates g = AssociationGates::FromOptions(f);
@@ -96,8 +96,8 @@ TEST(AssociationGates, MahalanobisUsesChiSquareQuantiles) {
 }
 
 TEST(AssociationGates, EuclideanHasNoIgnoredBand) {
-  common::FilterOptions f;
-  f.association = common::Association::kEuclidean;
+  robot_agent::FilterOptions f;
+  f.association = robot_agent::Association::kEuclidean;
   f.euclidean_gate = 0.5;
   const AssociationGates g = AssociationGates::FromOptions(f);
   EXPECT_EQ(g.Classify(0.2), AssociationKind::kMatched);

@@ -18,6 +18,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "robot_agent/filters/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
@@ -323,12 +324,12 @@ TEST(MrclamReplayTest, ConfigFilePointsAtDataset6) {
 TEST(MrclamCalibrationTest, FastSlamDelaysAndScalesTheCommands) {
   common::ScenarioOptions o = ReplayScenario(ExcerptDir(), {"r1"}, 1.0);
   o.filter.particles = 1;
-  o.filter.proposal = common::Proposal::kMotion;
+  o.filter.proposal = robot_agent::Proposal::kMotion;
   o.noise.robot_process_var.setZero();
   o.filter.odometry_scale = 0.9;
   o.filter.odometry_turn_scale = 0.8;
   o.filter.odometry_lag_s = 0.2;
-  const auto filter = robot_agent::filters::CreateFilter(o, "r1", 1);
+  const auto filter = robot_agent::filters::CreateFilter(common::AgentOptionsFor(o, "r1"), 1);
   ASSERT_NE(filter, nullptr);
   std::vector<double> x;
   double heading = 0.0;

@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/app.h"
+#include "common/config/scenario_flags.h"
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
 #include "common/logging.h"

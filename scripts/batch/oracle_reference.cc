@@ -1,0 +1,53 @@
+#include "scripts/batch/oracle_reference.h"
+
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "common/config/agent_options_projection.h"
+
+namespace mrslam::batch {
+
+std::map<int, BatchSmoother::Kinematics> OracleKinematics(const common::ScenarioOptions& scenario) {
+  if (scenario.landmark_field.enabled) {
+    throw std::invalid_argument("the reference knows listed landmarks only, not a landmark_field");
+  }
+  std::map<int, BatchSmoother::Kinematics> kinematics;
+  for (const auto& l : scenario.landmarks) {
+    BatchSmoother::Kinematics k;
+    if (l.motion.model == common::LandmarkMotionModel::kUnicycle) {
+      k = {false, l.motion.v_mps, l.motion.w_radps};
+    } else if (l.motion.model != common::LandmarkMotionModel::kStatic) {
+      throw std::invalid_argument("the reference knows static and unicycle landmarks only (landmark " +
+                                  std::to_string(l.id) + ")");
+    }
+    kinematics[l.id] = k;
+  }
+  return kinematics;
+}
+
+std::vector<BatchSmoother::RobotStart> OracleStarts(const common::ScenarioOptions& scenario,
+                                                    const std::vector<int>& robot_indices,
+                                                    const std::vector<common::Pose2>& first_pose_guesses) {
+  if (robot_indices.empty() || first_pose_guesses.size() + 1 != robot_indices.size()) {
+    throw std::invalid_argument("the reference needs one first-pose guess per robot after the first");
+  }
+  std::vector<BatchSmoother::RobotStart> robots;
+  for (std::size_t r = 0; r < robot_indices.size(); ++r) {
+    const common::RobotOptions& robot = scenario.robots.at(robot_indices[r]);
+    robots.push_back({robot.id, r == 0 ? common::InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]});
+  }
+  return robots;
+}
+
+BatchSmoother OracleSmoother(const common::ScenarioOptions& scenario, const std::vector<int>& robot_indices,
+                             const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step) {
+  auto starts = OracleStarts(scenario, robot_indices, first_pose_guesses);
+  auto kinematics = OracleKinematics(scenario);
+  return BatchSmoother(common::AgentOptionsFor(scenario, starts.front().id), starts, std::move(kinematics),
+                       robot_detections_from_step,
+                       scenario.replay.enabled ? BatchSmoother::Unlisted::kStatic : BatchSmoother::Unlisted::kLeftOut);
+}
+
+}  // namespace mrslam::batch
