@@ -48,6 +48,7 @@
 #include "scripts/batch/oracle_reference.h"
 #include "world_sim/core/world.h"
 #include "world_sim/evaluator/metrics.h"
+#include "world_sim/evaluator/robot_scorer.h"
 #include "world_sim/source/step_source_factory.h"
 
 namespace mrslam {
@@ -116,6 +117,7 @@ class Estimator {
   // The current pose and map (landmark positions with their identities).
   struct Output {
     common::Pose2 pose;
+    std::optional<Eigen::Matrix3d> covariance;  // none from the reference
     std::vector<evaluator::MapPoint> map;
   };
   Output Estimate() const {
@@ -123,6 +125,7 @@ class Estimator {
     if (filter_) {
       const robot_agent::filters::FilterEstimate e = filter_->Estimate();
       out.pose = e.pose;
+      out.covariance = e.covariance;
       for (const auto& l : e.landmarks) out.map.push_back({l.mean.head<2>(), l.landmark_id});
     } else {
       out.pose = reference_->Pose();
@@ -137,48 +140,33 @@ class Estimator {
 };
 
 // Runs one seed: the scenario's step source (the simulated World, or the replay of a recorded data
-// set) + one estimator per robot; returns the metrics per robot (scenario order).
+// set) + one estimator per robot, each scored as the evaluator scores it (RobotScorer); returns the
+// metrics per robot (scenario order).
 std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t seed, bool reference) {
   options.seed = seed;
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
-  const std::vector<std::pair<std::string, common::Pose2>> frames = source->Truth().frames;
+  const common::GroundTruth truth0 = source->Truth();
   const std::size_t n = options.robots.size();
   std::vector<Estimator> estimators;
-  std::vector<common::Pose2> dead_reckoning;
+  std::vector<evaluator::RobotScorer> scorers;
   for (std::size_t i = 0; i < n; ++i) {
     estimators.emplace_back(options, static_cast<int>(i), seed, reference);
-    dead_reckoning.push_back(common::InitialPoseInOwnFrame(options.robots[i]));
+    const common::Pose2& frame = truth0.frames[i].second;
+    scorers.emplace_back(frame, evaluator::TruthInOwnFrame(truth0.robots[i].pose, frame), options.sensors.lidar);
   }
-  std::vector<std::vector<double>> position(n), heading(n), landmark(n), dr(n);
   for (int k = 0; k < options.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();
     const common::GroundTruth truth = source->Truth();
-    std::vector<evaluator::TruePoint> true_landmarks;
-    for (const auto& l : truth.landmarks) {
-      true_landmarks.push_back({l.pose.Translation(), std::stoi(l.id)});
-    }
     for (std::size_t i = 0; i < n; ++i) {
-      const common::Pose2& frame = frames[i].second;
-      const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
       estimators[i].Process(steps[i]);
       const Estimator::Output e = estimators[i].Estimate();
-      position[i].push_back(evaluator::PositionError(e.pose, truth_own));
-      heading[i].push_back(common::DegFromRad(evaluator::HeadingError(e.pose, truth_own)));
-      for (const double err : evaluator::LandmarkErrors(e.map, true_landmarks, frame)) {
-        landmark[i].push_back(err);
-      }
-      for (const auto& s : steps[i].odometry.segments) {
-        dead_reckoning[i] = common::UnicycleStep(dead_reckoning[i], s.v_mps, s.w_radps, s.dt_s);
-      }
-      dr[i].push_back(evaluator::PositionError(dead_reckoning[i], truth_own));
+      scorers[i].Add(truth, truth.robots[i].pose, e.pose, e.covariance, e.map, &steps[i].odometry);
     }
   }
   std::vector<RobotRun> out(n);
   for (std::size_t i = 0; i < n; ++i) {
-    out[i].position_rmse_m = evaluator::Rmse(position[i]);
-    out[i].heading_rmse_deg = evaluator::Rmse(heading[i]);
-    out[i].landmark_rmse_m = landmark[i].empty() ? std::nan("") : evaluator::Rmse(landmark[i]);
-    out[i].dead_reckoning_rmse_m = evaluator::Rmse(dr[i]);
+    const evaluator::RobotSummary s = scorers[i].Summary();
+    out[i] = {s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m};
   }
   return out;
 }

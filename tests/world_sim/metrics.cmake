@@ -7,3 +7,8 @@ mrslam_add_test(metrics_test
 mrslam_add_test(run_evaluator_test
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/run_evaluator_test.cc
   LIBS mrslam_run_evaluator)
+
+# One robot's step-by-step scorer, shared by the evaluator and the batch tools.
+mrslam_add_test(robot_scorer_test
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/robot_scorer_test.cc
+  LIBS mrslam_metrics)

@@ -29,12 +29,6 @@ Pose2 FrameOf(const common::GroundTruth& truth, const std::string& robot_id) {
   throw std::runtime_error("the truth has no frame for robot '" + robot_id + "'");
 }
 
-std::vector<TruePoint> TrueLandmarks(const common::GroundTruth& truth) {
-  std::vector<TruePoint> points;
-  for (const auto& l : truth.landmarks) points.push_back({l.pose.Translation(), std::stoi(l.id)});
-  return points;
-}
-
 // TUM line: t x y z qx qy qz qw, with the heading as a rotation about z.
 std::string TumLine(double t, const Pose2& p) {
   const Eigen::Quaterniond q(Eigen::AngleAxisd(p.heading, Eigen::Vector3d::UnitZ()));
@@ -82,20 +76,18 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
   fs::create_directories(out / "trajectories");
   if (truth_.empty()) throw std::runtime_error("no ground truth received");
   const auto& truth0 = truth_.begin()->second;
-  const Pose2 frame_g1 = FrameOf(truth0, scenario_.robots.front().id);
-  const double cutoff_m = 3.0;
-
-  std::ofstream metrics, tracks;
-  OpenOrThrow(metrics, out / "metrics.csv");
-  OpenOrThrow(tracks, out / "tracks.csv");
-  metrics << "step,time_s,robot,x_err_m,y_err_m,position_err_m,heading_err_deg,sigma_x_m,sigma_y_m,"
-             "sigma_heading_deg,nees,landmark_rmse_m,landmarks_mapped,map_completeness,ess\n";
-  tracks << "step,robot,kind,id,x_m,y_m\n";
+  Outputs files;
+  files.frame_g1 = FrameOf(truth0, scenario_.robots.front().id);
+  OpenOrThrow(files.metrics, out / "metrics.csv");
+  OpenOrThrow(files.tracks, out / "tracks.csv");
+  files.metrics << "step,time_s,robot,x_err_m,y_err_m,position_err_m,heading_err_deg,sigma_x_m,sigma_y_m,"
+                   "sigma_heading_deg,nees,landmark_rmse_m,landmarks_mapped,map_completeness,ess\n";
+  files.tracks << "step,robot,kind,id,x_m,y_m\n";
   // True landmarks in G1, once per step.
   for (const auto& [step, truth] : truth_) {
     for (const auto& l : truth.landmarks) {
-      const auto p = TransformPoint(common::Inverse(frame_g1), l.pose.Translation());
-      tracks << fmt::format("{},world,truth_landmark,{},{:.4f},{:.4f}\n", step, l.id, p.x(), p.y());
+      const auto p = TransformPoint(common::Inverse(files.frame_g1), l.pose.Translation());
+      files.tracks << fmt::format("{},world,truth_landmark,{},{:.4f},{:.4f}\n", step, l.id, p.x(), p.y());
     }
   }
 
@@ -105,154 +97,131 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
   summary["steps"] = scenario_.run.steps;
   summary["wall_seconds"] = wall_seconds;
   summary["robots"] = nlohmann::json::object();
-
-  // Whether a landmark is within the lidar's reach of a robot (true poses).
-  const auto in_reach = [&](const Pose2& robot_pose, const common::EntityTruth& landmark) {
-    const auto z = MeasureRangeBearing(robot_pose, landmark.pose.Translation());
-    return z.range_m <= scenario_.sensors.lidar.max_range_m &&
-           std::abs(z.bearing_rad) <= scenario_.sensors.lidar.fov_rad / 2.0;
-  };
-  // Per robot, the true landmarks ever within its reach (for the union completeness).
-  std::map<std::string, std::set<int>> reached;
-  for (const auto& [step, truth] : truth_) {
-    for (const auto& rt : truth.robots) {
-      for (const auto& l : truth.landmarks) {
-        if (in_reach(rt.pose, l)) reached[rt.id].insert(std::stoi(l.id));
-      }
-    }
-  }
-
+  const auto reached = ReachedLandmarks();
   for (const auto& robot : scenario_.robots) {
-    const std::string& id = robot.id;
-    const Pose2 frame = FrameOf(truth0, id);
-    const Pose2 g1_from_gi = common::Compose(common::Inverse(frame_g1), frame);
-    std::ofstream tum_est, tum_truth;
-    OpenOrThrow(tum_est, out / "trajectories" / (id + "_estimate.tum"));
-    OpenOrThrow(tum_truth, out / "trajectories" / (id + "_truth.tum"));
-
-    std::vector<double> pos_err, head_err, lm_err, dr_err, nees;
-    std::set<int> seen;    // true landmark ids ever within the robot's sensor reach
-    std::set<int> in_map;  // true landmark ids that stand in the map at the last scored step
-    double completeness = 0.0;
-    std::size_t mapped = 0;
-    // Dead reckoning from the true initial pose in the robot's own frame.
-    const auto* r0 = FindEntity(truth0.robots, id);
-    Pose2 dead_reckoning = r0 != nullptr ? TruthInOwnFrame(r0->pose, frame) : Pose2{};
-    const auto& odo = odometry_.count(id) ? odometry_.at(id) : std::map<std::uint32_t, common::Odometry>{};
-    const RobotEstimate* last = nullptr;
-
-    for (const auto& [step, est] : estimates_.at(id)) {
-      const auto t_it = truth_.find(step);
-      if (t_it == truth_.end()) continue;
-      const auto& truth = t_it->second;
-      const auto* rt = FindEntity(truth.robots, id);
-      if (rt == nullptr) continue;
-      const Pose2 truth_own = TruthInOwnFrame(rt->pose, frame);
-      const double e_pos = PositionError(est.pose, truth_own);
-      const double e_head = HeadingError(est.pose, truth_own);
-      const double n = PoseNees(est.pose, est.covariance, truth_own);
-      pos_err.push_back(e_pos);
-      head_err.push_back(e_head);
-      if (std::isfinite(n)) nees.push_back(n);
-      if (auto o = odo.find(step); o != odo.end()) {
-        for (const auto& g : o->second.segments)
-          dead_reckoning = UnicycleStep(dead_reckoning, g.v_mps, g.w_radps, g.dt_s);
-        dr_err.push_back(PositionError(dead_reckoning, truth_own));
-      }
-      // Landmarks the robot could have sensed so far (its true pose, the lidar's reach).
-      for (const auto& l : truth.landmarks) {
-        if (in_reach(rt->pose, l)) seen.insert(std::stoi(l.id));
-      }
-      const auto true_points = TrueLandmarks(truth);
-      const auto errors = LandmarkErrors(est.landmarks, true_points, frame, cutoff_m);
-      lm_err.insert(lm_err.end(), errors.begin(), errors.end());
-      const auto matched = MatchedTruth(est.landmarks, true_points, frame, cutoff_m);
-      std::size_t matched_seen = 0;
-      in_map.clear();
-      for (const int j : matched) {
-        const int landmark_id = true_points[static_cast<std::size_t>(j)].landmark_id;
-        matched_seen += seen.count(landmark_id);
-        in_map.insert(landmark_id);
-      }
-      completeness = seen.empty() ? 1.0 : static_cast<double>(matched_seen) / static_cast<double>(seen.size());
-      mapped = est.landmarks.size();
-
-      const Eigen::Vector3d sigma = est.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-      metrics << fmt::format(
-          "{},{:.3f},{},{:.5f},{:.5f},{:.5f},{:.4f},{:.5f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.2f}\n", step,
-          est.time_s, id, est.pose.x - truth_own.x, est.pose.y - truth_own.y, e_pos,
-          common::DegFromRad(common::WrapAngle(est.pose.heading - truth_own.heading)), sigma.x(), sigma.y(),
-          common::DegFromRad(sigma.z()), n, Rmse(errors), est.landmarks.size(), completeness,
-          est.effective_sample_size);
-      tum_est << TumLine(est.time_s, est.pose);
-      tum_truth << TumLine(est.time_s, truth_own);
-      const Pose2 est_g1 = common::Compose(g1_from_gi, est.pose);
-      const Pose2 truth_g1 = common::Compose(g1_from_gi, truth_own);
-      tracks << fmt::format("{},{},estimate_robot,{},{:.4f},{:.4f}\n", step, id, id, est_g1.x, est_g1.y);
-      tracks << fmt::format("{},{},truth_robot,{},{:.4f},{:.4f}\n", step, id, id, truth_g1.x, truth_g1.y);
-      for (std::size_t k = 0; k < est.landmarks.size(); ++k) {
-        const auto p = TransformPoint(g1_from_gi, est.landmarks[k].position_m);
-        tracks << fmt::format("{},{},estimate_landmark,{},{:.4f},{:.4f}\n", step, id,
-                              est.landmarks[k].landmark_id >= 0 ? est.landmarks[k].landmark_id : static_cast<int>(k),
-                              p.x(), p.y());
-      }
-      last = &est;
-    }
-
-    nlohmann::json r;
-    r["position_rmse_m"] = Rmse(pos_err);
-    std::vector<double> head_deg;
-    head_deg.reserve(head_err.size());
-    for (const double e : head_err) head_deg.push_back(common::DegFromRad(e));
-    r["heading_rmse_deg"] = Rmse(head_deg);
-    r["landmark_rmse_m"] = Rmse(lm_err);
-    r["dead_reckoning_rmse_m"] = Rmse(dr_err);
-    double nees_sum = 0.0;
-    for (const double v : nees) nees_sum += v;
-    r["mean_nees"] = nees.empty() ? 0.0 : nees_sum / static_cast<double>(nees.size());
-    r["landmarks_mapped"] = mapped;
-    r["map_completeness"] = completeness;
-    // Of the landmarks within the reach of this robot or of any robot whose frame it knows (over
-    // the whole run), the share in its map at the end.
-    std::set<int> union_reach = reached[id];
-    if (last != nullptr) {
-      for (const auto& peer : last->frames_known) union_reach.insert(reached[peer].begin(), reached[peer].end());
-    }
-    std::size_t union_mapped = 0;
-    for (const int l : union_reach) union_mapped += in_map.count(l);
-    r["union_completeness"] =
-        union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
-    r["steps_scored"] = pos_err.size();
-    r["frames_known"] = last != nullptr ? last->frames_known : std::vector<std::string>{};
-    r["rejected_samples"] = last != nullptr ? last->rejected_samples : 0U;
-    // A rendezvous is scored by the transform the robot holds at the end of the encounter:
-    // the last report of that peer within 10 steps of the first.
-    nlohmann::json rendezvous = nlohmann::json::array();
-    if (last != nullptr) {
-      std::map<std::string, std::vector<const RendezvousRecord*>> by_peer;
-      for (const auto& rec : last->rendezvous) by_peer[rec.peer].push_back(&rec);
-      for (const auto& [peer, records] : by_peer) {
-        const int j = scenario_.RobotIndex(peer);
-        if (j < 0) continue;
-        const auto first_step = records.front()->step;
-        const RendezvousRecord* held = records.front();
-        for (const auto* rec : records) {
-          if (rec->step <= first_step + 10) held = rec;
-        }
-        const auto err = FrameTransformError(held->t_self_peer, frame, FrameOf(truth0, peer));
-        rendezvous.push_back({{"peer", peer},
-                              {"step", first_step},
-                              {"transform_error_m", err.translation_m},
-                              {"transform_error_deg", common::DegFromRad(err.rotation_rad)}});
-      }
-    }
-    r["rendezvous"] = rendezvous;
-    summary["robots"][id] = r;
+    OpenOrThrow(files.tum_estimate, out / "trajectories" / (robot.id + "_estimate.tum"));
+    OpenOrThrow(files.tum_truth, out / "trajectories" / (robot.id + "_truth.tum"));
+    summary["robots"][robot.id] = ScoreRobot(robot.id, reached, &files);
+    files.tum_estimate.close();
+    files.tum_truth.close();
   }
   std::ofstream js;
   OpenOrThrow(js, out / "summary.json");
   js << summary.dump(2) << "\n";
   return summary;
+}
+
+std::map<std::string, std::set<int>> RunEvaluator::ReachedLandmarks() const {
+  const RobotScorer reach({}, {}, scenario_.sensors.lidar);
+  std::map<std::string, std::set<int>> reached;
+  for (const auto& [step, truth] : truth_) {
+    for (const auto& rt : truth.robots) {
+      for (const auto& l : truth.landmarks) {
+        if (reach.InReach(rt.pose, l.pose.Translation())) reached[rt.id].insert(std::stoi(l.id));
+      }
+    }
+  }
+  return reached;
+}
+
+nlohmann::json RunEvaluator::ScoreRobot(const std::string& id, const std::map<std::string, std::set<int>>& reached,
+                                        Outputs* files) const {
+  const auto& truth0 = truth_.begin()->second;
+  const Pose2 frame = FrameOf(truth0, id);
+  // Dead reckoning from the true initial pose in the robot's own frame.
+  const auto* r0 = FindEntity(truth0.robots, id);
+  RobotScorer scorer(frame, r0 != nullptr ? TruthInOwnFrame(r0->pose, frame) : Pose2{}, scenario_.sensors.lidar);
+  const auto odometry = odometry_.find(id);
+  const RobotEstimate* last = nullptr;
+  for (const auto& [step, est] : estimates_.at(id)) {
+    const auto t_it = truth_.find(step);
+    if (t_it == truth_.end()) continue;
+    const auto* rt = FindEntity(t_it->second.robots, id);
+    if (rt == nullptr) continue;
+    const common::Odometry* odo = nullptr;
+    if (odometry != odometry_.end()) {
+      const auto o = odometry->second.find(step);
+      if (o != odometry->second.end()) odo = &o->second;
+    }
+    const StepScore score = scorer.Add(t_it->second, rt->pose, est.pose, est.covariance, est.landmarks, odo);
+    WriteStep(id, common::Compose(common::Inverse(files->frame_g1), frame), est, score, files);
+    last = &est;
+  }
+  const RobotSummary s = scorer.Summary();
+  nlohmann::json r;
+  r["position_rmse_m"] = s.position_rmse_m;
+  r["heading_rmse_deg"] = s.heading_rmse_deg;
+  r["landmark_rmse_m"] = s.landmark_rmse_m;
+  r["dead_reckoning_rmse_m"] = s.dead_reckoning_rmse_m;
+  r["mean_nees"] = s.mean_nees;
+  r["landmarks_mapped"] = s.landmarks_mapped;
+  r["map_completeness"] = s.map_completeness;
+  // Of the landmarks within the reach of this robot or of any robot whose frame it knows (over
+  // the whole run), the share in its map at the end.
+  std::set<int> union_reach;
+  if (const auto it = reached.find(id); it != reached.end()) union_reach = it->second;
+  if (last != nullptr) {
+    for (const auto& peer : last->frames_known) {
+      if (const auto it = reached.find(peer); it != reached.end())
+        union_reach.insert(it->second.begin(), it->second.end());
+    }
+  }
+  std::size_t union_mapped = 0;
+  for (const int l : union_reach) union_mapped += scorer.InMap().count(l);
+  r["union_completeness"] =
+      union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
+  r["steps_scored"] = s.steps_scored;
+  r["frames_known"] = last != nullptr ? last->frames_known : std::vector<std::string>{};
+  r["rejected_samples"] = last != nullptr ? last->rejected_samples : 0U;
+  r["rendezvous"] = last != nullptr ? ScoreRendezvous(frame, *last) : nlohmann::json::array();
+  return r;
+}
+
+void RunEvaluator::WriteStep(const std::string& id, const Pose2& g1_from_gi, const RobotEstimate& est,
+                             const StepScore& score, Outputs* files) {
+  const Pose2& truth_own = score.truth_own;
+  const Eigen::Vector3d sigma = est.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  files->metrics << fmt::format(
+      "{},{:.3f},{},{:.5f},{:.5f},{:.5f},{:.4f},{:.5f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.2f}\n", est.step,
+      est.time_s, id, est.pose.x - truth_own.x, est.pose.y - truth_own.y, score.position_err_m,
+      common::DegFromRad(common::WrapAngle(est.pose.heading - truth_own.heading)), sigma.x(), sigma.y(),
+      common::DegFromRad(sigma.z()), score.nees, Rmse(score.landmark_errors_m), est.landmarks.size(),
+      score.map_completeness, est.effective_sample_size);
+  files->tum_estimate << TumLine(est.time_s, est.pose);
+  files->tum_truth << TumLine(est.time_s, truth_own);
+  const Pose2 est_g1 = common::Compose(g1_from_gi, est.pose);
+  const Pose2 truth_g1 = common::Compose(g1_from_gi, truth_own);
+  files->tracks << fmt::format("{},{},estimate_robot,{},{:.4f},{:.4f}\n", est.step, id, id, est_g1.x, est_g1.y);
+  files->tracks << fmt::format("{},{},truth_robot,{},{:.4f},{:.4f}\n", est.step, id, id, truth_g1.x, truth_g1.y);
+  for (std::size_t k = 0; k < est.landmarks.size(); ++k) {
+    const auto p = TransformPoint(g1_from_gi, est.landmarks[k].position_m);
+    files->tracks << fmt::format("{},{},estimate_landmark,{},{:.4f},{:.4f}\n", est.step, id,
+                                 est.landmarks[k].landmark_id >= 0 ? est.landmarks[k].landmark_id : static_cast<int>(k),
+                                 p.x(), p.y());
+  }
+}
+
+nlohmann::json RunEvaluator::ScoreRendezvous(const Pose2& frame, const RobotEstimate& last) const {
+  // A rendezvous is scored by the transform the robot holds at the end of the encounter:
+  // the last report of that peer within 10 steps of the first.
+  const auto& truth0 = truth_.begin()->second;
+  nlohmann::json rendezvous = nlohmann::json::array();
+  std::map<std::string, std::vector<const RendezvousRecord*>> by_peer;
+  for (const auto& rec : last.rendezvous) by_peer[rec.peer].push_back(&rec);
+  for (const auto& [peer, records] : by_peer) {
+    if (scenario_.RobotIndex(peer) < 0) continue;
+    const auto first_step = records.front()->step;
+    const RendezvousRecord* held = records.front();
+    for (const auto* rec : records) {
+      if (rec->step <= first_step + 10) held = rec;
+    }
+    const auto err = FrameTransformError(held->t_self_peer, frame, FrameOf(truth0, peer));
+    rendezvous.push_back({{"peer", peer},
+                          {"step", first_step},
+                          {"transform_error_m", err.translation_m},
+                          {"transform_error_deg", common::DegFromRad(err.rotation_rad)}});
+  }
+  return rendezvous;
 }
 
 }  // namespace mrslam::evaluator

@@ -1,7 +1,9 @@
 #pragma once
 
 #include <cstdint>
+#include <fstream>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -11,6 +13,7 @@
 #include "common/config/scenario_options.h"
 #include "common/sensor_types.h"
 #include "world_sim/evaluator/metrics.h"
+#include "world_sim/evaluator/robot_scorer.h"
 
 namespace mrslam::evaluator {
 
@@ -56,6 +59,21 @@ class RunEvaluator {
   nlohmann::json Write(const std::string& out_dir, double wall_seconds) const;
 
  private:
+  // The files Write fills, and the first robot's frame G1 (tracks are in G1).
+  struct Outputs {
+    std::ofstream metrics, tracks, tum_estimate, tum_truth;
+    common::Pose2 frame_g1;
+  };
+  // Per robot, the true landmarks ever within its reach (for the union completeness).
+  std::map<std::string, std::set<int>> ReachedLandmarks() const;
+  // Scores robot id step by step (writing its rows, trajectories and tracks); its summary entry.
+  nlohmann::json ScoreRobot(const std::string& id, const std::map<std::string, std::set<int>>& reached,
+                            Outputs* files) const;
+  static void WriteStep(const std::string& id, const common::Pose2& g1_from_gi, const RobotEstimate& estimate,
+                        const StepScore& score, Outputs* files);
+  // The robot's rendezvous, each by the transform held at the end of the encounter.
+  nlohmann::json ScoreRendezvous(const common::Pose2& frame, const RobotEstimate& last) const;
+
   common::ScenarioOptions scenario_;
   std::map<std::uint32_t, common::GroundTruth> truth_;
   std::map<std::string, std::map<std::uint32_t, RobotEstimate>> estimates_;

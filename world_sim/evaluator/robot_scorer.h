@@ -1,0 +1,72 @@
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <set>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/se2.h"
+#include "common/sensor_options.h"
+#include "common/sensor_types.h"
+#include "world_sim/evaluator/metrics.h"
+
+namespace mrslam::evaluator {
+
+// What one step of one robot scored (docs/metrics.md), in the robot's own frame G_i.
+struct StepScore {
+  common::Pose2 truth_own;  // the true pose in G_i
+  double position_err_m = 0.0;
+  double heading_err_rad = 0.0;
+  double nees = 0.0;  // NaN without a usable covariance
+  std::vector<double> landmark_errors_m;
+  double map_completeness = 1.0;  // so far
+};
+
+// One robot's accuracy over a run, as summary.json reports it.
+struct RobotSummary {
+  double position_rmse_m = 0.0;
+  double heading_rmse_deg = 0.0;
+  double landmark_rmse_m = 0.0;        // 0 when the map never held a landmark
+  double dead_reckoning_rmse_m = 0.0;  // over the steps with odometry
+  double mean_nees = 0.0;              // over the steps with a finite NEES; 0 for none
+  std::size_t landmarks_mapped = 0;    // at the last step
+  double map_completeness = 1.0;       // at the last step
+  std::size_t steps_scored = 0;
+};
+
+// Scores one robot step by step against the truth: the single definition of the accuracy
+// metrics (docs/metrics.md) that the evaluator and the batch tools share. Pure.
+class RobotScorer {
+ public:
+  // frame_in_world: the robot's own frame G_i; dead_reckoning_start: its first pose in G_i; the
+  // lidar's reach decides which landmarks the robot could have sensed.
+  RobotScorer(const common::Pose2& frame_in_world, const common::Pose2& dead_reckoning_start,
+              const common::LidarOptions& lidar);
+
+  // One step: the truth (robot_truth: this robot's true pose in W), the estimate in G_i (without
+  // a covariance the NEES is not scored) and the step's odometry, if any, which advances the
+  // dead reckoning.
+  StepScore Add(const common::GroundTruth& truth, const common::Pose2& robot_truth, const common::Pose2& pose,
+                const std::optional<Eigen::Matrix3d>& covariance, const std::vector<MapPoint>& landmarks,
+                const common::Odometry* odometry);
+
+  RobotSummary Summary() const;
+  // The true landmark ids that stand in the map at the last step.
+  const std::set<int>& InMap() const { return in_map_; }
+  // Whether a landmark at point is within the lidar's reach of a robot at pose (true poses).
+  bool InReach(const common::Pose2& pose, const Eigen::Vector2d& point) const;
+
+ private:
+  common::Pose2 frame_;
+  common::Pose2 dead_reckoning_;
+  common::LidarOptions lidar_;
+  std::vector<double> position_err_, heading_err_deg_, landmark_err_, dead_reckoning_err_, nees_;
+  std::set<int> seen_;    // true landmark ids ever within the robot's reach
+  std::set<int> in_map_;  // true landmark ids in the map at the last step
+  double completeness_ = 1.0;
+  std::size_t mapped_ = 0;
+};
+
+}  // namespace mrslam::evaluator
