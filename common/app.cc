@@ -27,7 +27,10 @@ const std::atomic<bool>& InstallStopHandler() {
   return g_stop;
 }
 
-int RunMain(const std::string& name, CLI::App& app, int argc, char** argv, const std::function<int()>& body) {
+namespace {
+
+int ParseAndRun(const std::string& name, CLI::App& app, int argc, char** argv,
+                const std::function<int(const CLI::App&)>& body) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -36,11 +39,23 @@ int RunMain(const std::string& name, CLI::App& app, int argc, char** argv, const
     std::cerr << name << ": error: " << e.what() << " (see --help)\n";
     return 2;
   }
+  return body(app);
+}
+
+}  // namespace
+
+int RunMain(const std::string& name, const std::string& description, int argc, char** argv,
+            const std::function<void(CLI::App&)>& add_flags, const std::function<int(const CLI::App&)>& body) {
   try {
-    return body();
+    CLI::App app{description};
+    add_flags(app);
+    return ParseAndRun(name, app, argc, argv, body);
   } catch (const std::exception& e) {
     spdlog::shutdown();
     std::cerr << name << ": error: " << e.what() << "\n";
+    return 1;
+  } catch (...) {
+    std::cerr << name << ": error: unknown exception\n";
     return 1;
   }
 }

@@ -27,8 +27,10 @@ void AddCommonFlags(CLI::App& app, CommonFlags* flags);
 // The flag SIGINT and SIGTERM set (installed once).
 const std::atomic<bool>& InstallStopHandler();
 
-// Parses the command line and runs body: exceptions become "<name>: error: <what>" on stderr and
-// exit code 1; --help prints usage and exits 0; bad flags exit 2.
-int RunMain(const std::string& name, CLI::App& app, int argc, char** argv, const std::function<int()>& body);
+// The whole of an executable's main: builds its command line (description, then add_flags adds
+// its flags), parses it and runs body. Nothing escapes: exceptions become "<name>: error: <what>"
+// on stderr and exit code 1; --help prints usage and exits 0; bad flags exit 2.
+int RunMain(const std::string& name, const std::string& description, int argc, char** argv,
+            const std::function<void(CLI::App&)>& add_flags, const std::function<int(const CLI::App&)>& body);
 
 }  // namespace mrslam::common

@@ -688,9 +688,13 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment) {
       try {
         idx = std::stoul(k);
       } catch (const std::exception&) {
-        throw ScenarioError("override '" + path + "': '" + k + "' must be an index into a list");
+        throw ScenarioError(
+            std::string("override '").append(path).append("': '").append(k).append("' must be an index into a list"));
       }
-      if (idx >= cur.size()) throw ScenarioError("override '" + path + "': index " + k + " is out of range");
+      if (idx >= cur.size()) {
+        throw ScenarioError(
+            std::string("override '").append(path).append("': index ").append(k).append(" is out of range"));
+      }
       chain.push_back(cur[idx]);
     } else {
       if (!cur[k]) cur[k] = YAML::Node(YAML::NodeType::Map);

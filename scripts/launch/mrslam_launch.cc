@@ -427,21 +427,32 @@ int Main(const LaunchFlags& flags) {
 }  // namespace
 }  // namespace mrslam::launch
 
+namespace mrslam::launch {
+namespace {
+
+void AddFlags(CLI::App& app, LaunchFlags* flags) {
+  common::AddCommonFlags(app, &flags->common);
+  app.add_option("--out", flags->out_dir, "Output folder (summary.json, metrics.csv, trajectories/, plots/, logs/)")
+      ->required();
+  app.add_option("--seeds", flags->seeds, "Run seeds A..B in turn into OUT/seed-<S>/ and write OUT/aggregate.json");
+  app.add_flag("--no-plots", flags->no_plots, "Do not run plot_run.py");
+  app.add_option("--timeout-s", flags->timeout_s, "Stop a run that takes longer than this (0: no limit)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+}  // namespace
+}  // namespace mrslam::launch
+
 int main(int argc, char** argv) {
   using namespace mrslam;
-  CLI::App app{
-      "mrslam launcher: runs a scenario end to end (evaluator, world_sim, one robot_agent per robot) as separate "
-      "processes on a free DDS domain, then prints a summary and writes plots"};
   launch::LaunchFlags flags;
-  common::AddCommonFlags(app, &flags.common);
-  app.add_option("--out", flags.out_dir, "Output folder (summary.json, metrics.csv, trajectories/, plots/, logs/)")
-      ->required();
-  app.add_option("--seeds", flags.seeds, "Run seeds A..B in turn into OUT/seed-<S>/ and write OUT/aggregate.json");
-  app.add_flag("--no-plots", flags.no_plots, "Do not run plot_run.py");
-  app.add_option("--timeout-s", flags.timeout_s, "Stop a run that takes longer than this (0: no limit)")
-      ->check(CLI::NonNegativeNumber);
-  return common::RunMain(launch::kName, app, argc, argv, [&] {
-    flags.log_level_given = app.get_option("--log-level")->count() > 0;
-    return launch::Main(flags);
-  });
+  return common::RunMain(
+      launch::kName,
+      "mrslam launcher: runs a scenario end to end (evaluator, world_sim, one robot_agent per robot) as separate "
+      "processes on a free DDS domain, then prints a summary and writes plots",
+      argc, argv, [&](CLI::App& app) { launch::AddFlags(app, &flags); },
+      [&](const CLI::App& app) {
+        flags.log_level_given = app.get_option("--log-level")->count() > 0;
+        return launch::Main(flags);
+      });
 }

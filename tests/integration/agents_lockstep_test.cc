@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <map>
 
 #include <fmt/format.h>
@@ -47,11 +48,11 @@ TEST(AgentsLockstepTest, TwoAgentsPublishAnEstimateForEveryStep) {
   ASSERT_EQ(sim->WaitExit(seconds(120)), std::optional<int>(0)) << testing::ReadFile(dir + "/world_sim.log");
   for (std::size_t i = 0; i < agents.size(); ++i) {
     const auto& id = scenario.robots[i].id;
-    EXPECT_EQ(agents[i]->WaitExit(seconds(30)), std::optional<int>(0)) << testing::ReadFile(dir + "/" + id + ".log");
+    const std::string log = (std::filesystem::path(dir) / (id + ".log")).string();
+    EXPECT_EQ(agents[i]->WaitExit(seconds(30)), std::optional<int>(0)) << testing::ReadFile(log);
     // The robots meet: each agent's history crossed DDS with its snapshot and the other placed
     // it by the joint estimate.
-    EXPECT_THAT(testing::ReadFile(dir + "/" + id + ".log"), ::testing::HasSubstr("joint transform from both histories"))
-        << id;
+    EXPECT_THAT(testing::ReadFile(log), ::testing::HasSubstr("joint transform from both histories")) << id;
   }
   for (const auto& r : scenario.robots) {
     std::vector<std::uint32_t> steps;

@@ -176,7 +176,7 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
   // TUM trajectories: 8 numbers per line.
   for (const std::string id : {"r1", "r2"}) {
     for (const std::string kind : {"estimate", "truth"}) {
-      const std::string path = out + "/trajectories/" + id + "_" + kind + ".tum";
+      const std::string path = out + "/trajectories/" + (id + "_").append(kind).append(".tum");
       const auto lines = Lines(ReadFile(path));
       int poses = 0;
       for (const auto& line : lines) {
@@ -197,7 +197,7 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
 
   // Logs of every process, and the printed summary table.
   for (const std::string name : {"evaluator", "world_sim", "robot_agent_r1", "robot_agent_r2"}) {
-    EXPECT_TRUE(std::filesystem::exists(out + "/logs/" + name + ".log")) << name;
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / "logs" / (name + ".log"))) << name;
   }
   EXPECT_THAT(output, HasSubstr("position RMSE [m]"));
   EXPECT_THAT(output, HasSubstr("dead reckoning RMSE [m]"));
@@ -205,7 +205,7 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
   // Plots (only where /usr/bin/python3 has matplotlib).
   if (!HasMatplotlib()) GTEST_SKIP() << "/usr/bin/python3 lacks matplotlib: plots not checked";
   for (const std::string name : {"trajectories.png", "errors.png", "overview.png"}) {
-    const std::string path = out + "/plots/" + name;
+    const std::string path = (std::filesystem::path(out) / "plots" / name).string();
     ASSERT_TRUE(std::filesystem::exists(path)) << path << "\n" << ReadFile(out + "/logs/plot_run.log");
     EXPECT_GT(std::filesystem::file_size(path), 10000u) << path;
     EXPECT_THAT(output, HasSubstr(path));

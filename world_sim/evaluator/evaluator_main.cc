@@ -107,15 +107,18 @@ int Evaluate(const common::ScenarioOptions& scenario, int domain, bool shm, cons
 
 int main(int argc, char** argv) {
   using namespace mrslam;
-  CLI::App app{"mrslam evaluator: scores every robot's estimates against the ground truth"};
   common::CommonFlags flags;
-  common::AddCommonFlags(app, &flags);
   std::string out_dir;
-  app.add_option("--out", out_dir, "Output folder")->required();
-  return common::RunMain("evaluator", app, argc, argv, [&] {
-    common::SetupLogging("evaluator", flags.log_level);
-    const auto scenario = common::LoadScenarioFromFlags(flags);
-    const int domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
-    return evaluator::Evaluate(scenario, domain, flags.shared_memory, out_dir, common::InstallStopHandler());
-  });
+  const auto add_flags = [&](CLI::App& app) {
+    common::AddCommonFlags(app, &flags);
+    app.add_option("--out", out_dir, "Output folder")->required();
+  };
+  return common::RunMain("evaluator", "mrslam evaluator: scores every robot's estimates against the ground truth", argc,
+                         argv, add_flags, [&](const CLI::App&) {
+                           common::SetupLogging("evaluator", flags.log_level);
+                           const auto scenario = common::LoadScenarioFromFlags(flags);
+                           const int domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
+                           return evaluator::Evaluate(scenario, domain, flags.shared_memory, out_dir,
+                                                      common::InstallStopHandler());
+                         });
 }
