@@ -4,18 +4,8 @@
 // For every filter, dynamism (landmark_field.moving_fraction), speed (landmark_field.speed_mps)
 // and run (seed 1..N) it runs the scenario for the given frames and writes one row to
 // OUT/grid.csv, then OUT/tables.md (paper B's layout: rows dynamism, columns speed; means over
-// the runs) with the ratio ekf_ela / ekf and how often ekf_ela meets its targets against ekf. Metrics, per robot in its
-// own frame, then averaged over the robots:
-//   landmark RMSE (paper B's eqs. 17-18): at frame k, RMSE_k = sqrt(mean_i |m_i - l_i(k)|^2)
-//     over the landmarks in the robot's map at k (reported, not tentative: a landmark the filter
-//     holds as moving is not part of its map), each against the true position at frame k of the
-//     landmark it stands for (evaluator::LandmarkErrors, 3 m cut-off); then the mean of RMSE_k
-//     over the frames at which the map is not empty;
-//   robot RMSE: sqrt(mean_k |p_est(k) - p_true(k)|^2);
-//   static completeness: of the static true landmarks that came within the sensor's reach of
-//     the robot at some frame, the share that stands in its map at the end (MatchedTruth);
-//   static-only completeness: the same with the map's points assigned among the static true
-//     landmarks only, so that a mover passing a static landmark's map point cannot take it.
+// the runs) with the ratio ekf_ela / ekf and how often ekf_ela meets its targets against ekf. Metrics: paper B's,
+// per robot in its own frame, then averaged over the robots (evaluator::PaperBScorer).
 // Besides the filters, ekf_oracle (in-process only) is the ekf given the static landmarks'
 // detections only: the grid drops the movers' detections by the simulator's truth before the
 // filter sees the scan, so it scores what perfect rejection of moving landmarks reaches.
@@ -26,7 +16,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -36,12 +25,10 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -51,6 +38,7 @@
 #include "common/config/scenario_options.h"
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
+#include "common/parallel_for.h"
 #include "common/progress_line.h"
 #include "mrslamPubSubTypes.h"
 #include "robot_agent/filters/filter_factory.h"
@@ -59,7 +47,7 @@
 #include "scripts/launch/domain_picker.h"
 #include "scripts/launch/process_supervisor.h"
 #include "world_sim/core/world.h"
-#include "world_sim/evaluator/metrics.h"
+#include "world_sim/evaluator/paper_b_scorer.h"
 
 namespace mrslam::batch {
 namespace {
@@ -80,30 +68,13 @@ struct Job {
 // Exit code when the grid ran but some of its runs failed (grid.csv and tables.md hold the others).
 constexpr int kSomeRunsFailed = 3;
 
-// Its metrics: averages over the robots, then per robot.
-struct Row {
-  double landmark_rmse_m = 0.0;
-  double robot_rmse_m = 0.0;
-  double static_completeness = 0.0;
-  double static_only_completeness = 0.0;
-  std::vector<double> robot_landmark_rmse_m, robot_rmse_per_robot_m, robot_completeness;
-  double moving_flag_share = 0.0;  // reported moving landmarks / reported landmarks, over frames
-  double mapped_at_end = 0.0;      // landmarks in the map at the end, mean over robots
+// Its metrics (paper B's) and its wall time.
+struct Row : evaluator::PaperBScores {
   double seconds = 0.0;
   bool failed = false;  // the run threw: left out of grid.csv and of the means
 };
 
-double Mean(const std::vector<double>& v) {
-  double s = 0.0;
-  int n = 0;
-  for (const double x : v) {
-    if (std::isfinite(x)) {
-      s += x;
-      ++n;
-    }
-  }
-  return n > 0 ? s / n : std::nan("");
-}
+using evaluator::MeanOfFinite;
 
 // The ekf fed the static landmarks' detections only (see the top of this file).
 constexpr const char* kOracle = "ekf_oracle";
@@ -120,95 +91,31 @@ common::ScenarioOptions JobOptions(common::ScenarioOptions options, const Job& j
   return options;
 }
 
-// Accumulates one run's metrics frame by frame (the definitions at the top of this file).
-class RunScorer {
- public:
-  explicit RunScorer(const common::ScenarioOptions& options)
-      : options_(options), n_(options.robots.size()), frame_rmse_(n_), position_sq_(n_), reached_(n_), last_map_(n_) {}
+// The run's scorer: each robot's own frame and the lidar's range.
+evaluator::PaperBScorer MakeScorer(const common::ScenarioOptions& options) {
+  std::vector<common::Pose2> frames;
+  for (const auto& r : options.robots) frames.push_back(r.frame_in_world);
+  return evaluator::PaperBScorer(std::move(frames), options.sensors.lidar.max_range_m);
+}
 
-  // One frame: the truth and each robot's estimate, in scenario order.
-  void AddFrame(const common::GroundTruth& truth, const std::vector<robot_agent::filters::FilterEstimate>& estimates) {
-    true_landmarks_.clear();
-    is_static_.clear();
-    for (const auto& l : truth.landmarks) {
-      true_landmarks_.push_back({l.pose.Translation(), std::stoi(l.id)});
-      is_static_.push_back(!l.moving);
-    }
-    for (std::size_t i = 0; i < n_; ++i) {
-      const common::Pose2& frame = options_.robots[i].frame_in_world;
-      const common::Pose2 truth_own = evaluator::TruthInOwnFrame(truth.robots[i].pose, frame);
-      const robot_agent::filters::FilterEstimate& e = estimates[i];
-      const double pe = evaluator::PositionError(e.pose, truth_own);
-      position_sq_[i].push_back(pe * pe);
-      std::vector<evaluator::MapPoint>& map = last_map_[i];
-      map.clear();
-      for (const auto& l : e.landmarks) {
-        all_reported_ += 1.0;
-        if (l.moving) moving_reported_ += 1.0;
-        if (!l.tentative) map.push_back({l.mean.head<2>(), l.landmark_id});
-      }
-      if (!map.empty()) {
-        const std::vector<double> errors = evaluator::LandmarkErrors(map, true_landmarks_, frame);
-        double sq = 0.0;
-        for (const double err : errors) sq += err * err;
-        frame_rmse_[i].push_back(std::sqrt(sq / static_cast<double>(errors.size())));
-      }
-      reached_[i].resize(truth.landmarks.size(), 0);
-      const Eigen::Vector2d robot_xy = truth.robots[i].pose.Translation();
-      for (std::size_t l = 0; l < truth.landmarks.size(); ++l) {
-        if ((true_landmarks_[l].position_m - robot_xy).norm() <= options_.sensors.lidar.max_range_m) {
-          reached_[i][l] = 1;
-        }
-      }
+// What a filter's estimates report, as the scorer reads them.
+std::vector<evaluator::RobotReport> Reports(const std::vector<robot_agent::filters::FilterEstimate>& estimates) {
+  std::vector<evaluator::RobotReport> reports(estimates.size());
+  for (std::size_t i = 0; i < estimates.size(); ++i) {
+    reports[i].pose = estimates[i].pose;
+    for (const auto& l : estimates[i].landmarks) {
+      reports[i].landmarks.push_back({l.mean.head<2>(), l.landmark_id, l.tentative, l.moving});
     }
   }
+  return reports;
+}
 
-  Row Finish(double seconds) const {
-    Row row;
-    std::vector<evaluator::TruePoint> static_landmarks;
-    for (std::size_t l = 0; l < true_landmarks_.size(); ++l) {
-      if (is_static_[l]) static_landmarks.push_back(true_landmarks_[l]);
-    }
-    std::vector<double> static_only_completeness;  // per robot
-    for (std::size_t i = 0; i < n_; ++i) {
-      row.robot_landmark_rmse_m.push_back(Mean(frame_rmse_[i]));
-      row.robot_rmse_per_robot_m.push_back(std::sqrt(Mean(position_sq_[i])));
-      const std::vector<int> matched =
-          evaluator::MatchedTruth(last_map_[i], true_landmarks_, options_.robots[i].frame_in_world);
-      const std::vector<int> matched_static =
-          evaluator::MatchedTruth(last_map_[i], static_landmarks, options_.robots[i].frame_in_world);
-      int reach = 0, kept = 0, kept_static = 0;
-      for (std::size_t l = 0, s = 0; l < true_landmarks_.size(); ++l) {
-        if (!is_static_[l]) continue;
-        const int static_index = static_cast<int>(s++);
-        if (!reached_[i][l]) continue;
-        ++reach;
-        if (std::binary_search(matched.begin(), matched.end(), static_cast<int>(l))) ++kept;
-        if (std::binary_search(matched_static.begin(), matched_static.end(), static_index)) ++kept_static;
-      }
-      row.robot_completeness.push_back(reach > 0 ? static_cast<double>(kept) / reach : std::nan(""));
-      static_only_completeness.push_back(reach > 0 ? static_cast<double>(kept_static) / reach : std::nan(""));
-      row.mapped_at_end += static_cast<double>(last_map_[i].size()) / static_cast<double>(n_);
-    }
-    row.landmark_rmse_m = Mean(row.robot_landmark_rmse_m);
-    row.robot_rmse_m = Mean(row.robot_rmse_per_robot_m);
-    row.static_completeness = Mean(row.robot_completeness);
-    row.static_only_completeness = Mean(static_only_completeness);
-    row.moving_flag_share = all_reported_ > 0.0 ? moving_reported_ / all_reported_ : 0.0;
-    row.seconds = seconds;
-    return row;
-  }
-
- private:
-  const common::ScenarioOptions& options_;
-  std::size_t n_;
-  std::vector<std::vector<double>> frame_rmse_, position_sq_;
-  std::vector<std::vector<std::uint8_t>> reached_;
-  std::vector<std::vector<evaluator::MapPoint>> last_map_;
-  double moving_reported_ = 0.0, all_reported_ = 0.0;
-  std::vector<evaluator::TruePoint> true_landmarks_;
-  std::vector<bool> is_static_;
-};
+Row Finish(const evaluator::PaperBScorer& scorer, double seconds) {
+  Row row;
+  static_cast<evaluator::PaperBScores&>(row) = scorer.Finish();
+  row.seconds = seconds;
+  return row;
+}
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -243,7 +150,7 @@ Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
     filters.push_back(robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, robot.id), options.seed));
     if (!filters.back()) throw std::runtime_error("filter.type " + job.filter + " is not implemented");
   }
-  RunScorer scorer(options);
+  evaluator::PaperBScorer scorer = MakeScorer(options);
   std::vector<robot_agent::filters::FilterEstimate> estimates(filters.size());
   for (int k = 0; k < frames; ++k) {
     std::vector<common::SensorStep> steps = world.Step();
@@ -252,9 +159,9 @@ Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
       filters[i]->Process(steps[i]);
       estimates[i] = filters[i]->Estimate();
     }
-    scorer.AddFrame(world.Truth(), estimates);
+    scorer.AddFrame(world.Truth(), Reports(estimates));
   }
-  return scorer.Finish(SecondsSince(start));
+  return Finish(scorer, SecondsSince(start));
 }
 
 // What the processes of a multi-process job get besides the job's own settings.
@@ -342,7 +249,7 @@ Row RunJobMultiProcess(const common::ScenarioOptions& base, const MultiProcessSe
   while (drain(std::chrono::milliseconds(300))) {
   }
 
-  RunScorer scorer(options);
+  evaluator::PaperBScorer scorer = MakeScorer(options);
   std::vector<robot_agent::filters::FilterEstimate> frame(options.robots.size());
   for (int k = 1; k <= frames; ++k) {
     const auto step = static_cast<std::uint32_t>(k);
@@ -354,9 +261,9 @@ Row RunJobMultiProcess(const common::ScenarioOptions& base, const MultiProcessSe
       }
       frame[i] = it->second;
     }
-    scorer.AddFrame(truth.at(step), frame);
+    scorer.AddFrame(truth.at(step), Reports(frame));
   }
-  return scorer.Finish(SecondsSince(start));
+  return Finish(scorer, SecondsSince(start));
 }
 
 std::vector<std::string> Split(const std::string& text) {
@@ -387,7 +294,7 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
   auto mean_of = [&](const std::string& f, int d, int s, double Row::*field) {
     std::vector<double> v;
     for (const Row* r : cells[{f, d, s}]) v.push_back(r->*field);
-    return Mean(v);
+    return MeanOfFinite(v);
   };
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
@@ -453,7 +360,7 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
       return per_filter([&](const std::string& f) {
         std::vector<double> v;
         for (const Row* r : cells[{f, d, sp}]) v.push_back(r->robot_rmse_per_robot_m[robot]);
-        return Mean(v);
+        return MeanOfFinite(v);
       });
     });
   }
@@ -556,48 +463,39 @@ int Main(int argc, char** argv) {
   const int jobs_per_cell = runs * static_cast<int>(filters.size());
   const int num_cells = static_cast<int>(kDynamism.size() * kSpeeds.size());
   std::vector<Row> rows(jobs.size());
+  std::vector<std::string> errors(jobs.size());
   std::vector<int> cell_left(num_cells, jobs_per_cell);
-  std::atomic<int> next{0};
-  int done = 0, cells_done = 0;
-  std::mutex mutex;
+  int cells_done = 0;
   int failed = 0;
   std::string first_error;
   common::ProgressLine progress;
   const auto start = std::chrono::steady_clock::now();
-  auto worker = [&]() {
-    for (int j = next++; j < num_jobs; j = next++) {
-      // A run that fails is counted and left out; the others go on.
-      Row row;
-      std::string error;
-      try {
-        row = multi_process ? RunJobMultiProcess(options, setup, jobs[j], frames) : RunJob(options, jobs[j], frames);
-      } catch (const std::exception& e) {
-        error = e.what();
-        row.failed = true;
-      }
-      const std::lock_guard<std::mutex> lock(mutex);
-      if (row.failed) {
-        progress.Finish();
-        std::fprintf(stderr, "mrslam_grid: run %d of %s at dynamism %g, speed %g m/s failed: %s\n", jobs[j].run,
-                     jobs[j].filter.c_str(), kDynamism[jobs[j].dynamism_index], kSpeeds[jobs[j].speed_index],
-                     error.c_str());
-        if (failed++ == 0) first_error = error;
-      }
-      rows[j] = row;
-      ++done;
-      const int cell = jobs[j].dynamism_index * static_cast<int>(kSpeeds.size()) + jobs[j].speed_index;
-      if (--cell_left[cell] == 0) ++cells_done;
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const double left = elapsed / done * (num_jobs - done);
-      progress.Show(fmt::format("cells {}/{}, runs {}/{}, elapsed {:.0f} s, left ~{:.0f} s", cells_done, num_cells,
-                                done, num_jobs, elapsed, left),
-                    done == num_jobs);
+  // A run that fails is counted and left out; the others go on.
+  const auto run = [&](int j) {
+    try {
+      rows[j] = multi_process ? RunJobMultiProcess(options, setup, jobs[j], frames) : RunJob(options, jobs[j], frames);
+    } catch (const std::exception& e) {
+      errors[j] = e.what();
+      rows[j].failed = true;
     }
   };
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<std::size_t>(std::min(threads, num_jobs)));
-  for (int t = 0; t < std::min(threads, num_jobs); ++t) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
+  const auto done = [&](int j, int finished) {
+    if (rows[j].failed) {
+      progress.Finish();
+      std::fprintf(stderr, "mrslam_grid: run %d of %s at dynamism %g, speed %g m/s failed: %s\n", jobs[j].run,
+                   jobs[j].filter.c_str(), kDynamism[jobs[j].dynamism_index], kSpeeds[jobs[j].speed_index],
+                   errors[j].c_str());
+      if (failed++ == 0) first_error = errors[j];
+    }
+    const int cell = jobs[j].dynamism_index * static_cast<int>(kSpeeds.size()) + jobs[j].speed_index;
+    if (--cell_left[cell] == 0) ++cells_done;
+    const double elapsed = SecondsSince(start);
+    const double left = elapsed / finished * (num_jobs - finished);
+    progress.Show(fmt::format("cells {}/{}, runs {}/{}, elapsed {:.0f} s, left ~{:.0f} s", cells_done, num_cells,
+                              finished, num_jobs, elapsed, left),
+                  finished == num_jobs);
+  };
+  common::ParallelFor(num_jobs, threads, run, done);
   progress.Finish();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

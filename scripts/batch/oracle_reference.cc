@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "common/config/agent_options_projection.h"
+#include "world_sim/core/world.h"
 
 namespace mrslam::batch {
 
@@ -48,6 +49,28 @@ BatchSmoother OracleSmoother(const common::ScenarioOptions& scenario, const std:
   return BatchSmoother(common::AgentOptionsFor(scenario, starts.front().id), starts, std::move(kinematics),
                        robot_detections_from_step,
                        scenario.replay.enabled ? BatchSmoother::Unlisted::kStatic : BatchSmoother::Unlisted::kLeftOut);
+}
+
+std::optional<std::map<int, BatchSmoother::Kinematics>> FieldStatics(const common::ScenarioOptions& scenario) {
+  if (!scenario.landmark_field.enabled) return std::nullopt;
+  std::map<int, BatchSmoother::Kinematics> statics;
+  for (const auto& l : world_sim::ExpandLandmarks(scenario)) {
+    if (l.motion.model == common::LandmarkMotionModel::kStatic) statics[l.id] = {};
+  }
+  return statics;
+}
+
+std::unique_ptr<BatchSmoother> MakeOracleReference(
+    const common::ScenarioOptions& scenario,
+    const std::optional<std::map<int, BatchSmoother::Kinematics>>& field_statics, const std::vector<int>& robot_indices,
+    const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step) {
+  if (!field_statics) {
+    return std::make_unique<BatchSmoother>(
+        OracleSmoother(scenario, robot_indices, first_pose_guesses, robot_detections_from_step));
+  }
+  return std::make_unique<BatchSmoother>(
+      common::AgentOptionsFor(scenario, scenario.robots.at(robot_indices.front()).id),
+      OracleStarts(scenario, robot_indices, first_pose_guesses), *field_statics, robot_detections_from_step);
 }
 
 }  // namespace mrslam::batch

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <map>
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include "common/config/scenario_options.h"
@@ -32,5 +34,16 @@ std::vector<BatchSmoother::RobotStart> OracleStarts(const common::ScenarioOption
 BatchSmoother OracleSmoother(const common::ScenarioOptions& scenario, const std::vector<int>& robot_indices,
                              const std::vector<common::Pose2>& first_pose_guesses = {},
                              int robot_detections_from_step = 0);
+
+// With a landmark_field: its static landmarks, all of them static (the movers shuttle back and
+// forth, a motion the reference does not model); nothing without a field.
+std::optional<std::map<int, BatchSmoother::Kinematics>> FieldStatics(const common::ScenarioOptions& scenario);
+
+// The reference of the robots (as OracleSmoother), or with field_statics (from FieldStatics) the
+// reference that knows the field's static landmarks only and leaves the movers' readings out.
+std::unique_ptr<BatchSmoother> MakeOracleReference(
+    const common::ScenarioOptions& scenario,
+    const std::optional<std::map<int, BatchSmoother::Kinematics>>& field_statics, const std::vector<int>& robot_indices,
+    const std::vector<common::Pose2>& first_pose_guesses, int robot_detections_from_step);
 
 }  // namespace mrslam::batch

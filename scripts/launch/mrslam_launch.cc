@@ -12,7 +12,6 @@
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -25,6 +24,7 @@
 #include "common/config/scenario_options.h"
 #include "common/dds/participant.h"
 #include "common/progress_line.h"
+#include "common/seed_range.h"
 #include "scripts/launch/domain_picker.h"
 #include "scripts/launch/process_supervisor.h"
 #include "scripts/launch/progress_monitor.h"
@@ -70,22 +70,6 @@ std::string FormatSeconds(double s) {
     std::snprintf(buffer, sizeof(buffer), "%d min %02d s", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
   }
   return buffer;
-}
-
-// "A..B" (or a single seed "A") to the list A, A+1, ..., B.
-std::vector<long long> ParseSeeds(const std::string& text) {
-  static const std::regex pattern(R"(^\s*(\d{1,15})\s*(?:\.\.\s*(\d{1,15})\s*)?$)");
-  std::smatch m;
-  if (!std::regex_match(text, m, pattern)) {
-    throw std::runtime_error("--seeds '" + text + "' is not of the form A..B with 0 <= A <= B");
-  }
-  const long long first = std::stoll(m[1].str());
-  const long long last = m[2].matched ? std::stoll(m[2].str()) : first;
-  if (last < first) throw std::runtime_error("--seeds '" + text + "': the last seed is below the first");
-  if (last - first >= 10000) throw std::runtime_error("--seeds '" + text + "': more than 10000 seeds");
-  std::vector<long long> seeds;
-  for (long long s = first; s <= last; ++s) seeds.push_back(s);
-  return seeds;
 }
 
 // Shows a run's progress (common::ProgressLine); off a terminal only when something changed.
@@ -336,8 +320,9 @@ int Main(const LaunchFlags& flags) {
   const auto scenario = common::LoadScenarioFromFlags(flags.common);  // validates; throws one line
   const std::string scenario_path = fs::absolute(flags.common.scenario).string();
   if (!flags.seeds.empty() && flags.common.seed >= 0) throw std::runtime_error("give --seed or --seeds, not both");
-  const std::vector<long long> seeds =
-      flags.seeds.empty() ? std::vector<long long>{static_cast<long long>(scenario.seed)} : ParseSeeds(flags.seeds);
+  const std::vector<long long> seeds = flags.seeds.empty()
+                                           ? std::vector<long long>{static_cast<long long>(scenario.seed)}
+                                           : common::ParseSeedRange("--seeds", flags.seeds).Seeds();
   const bool multi = !flags.seeds.empty();
 
   // The domain: --domain or MRSLAM_DOMAIN if given (as every process resolves it), else a free one.

@@ -12,3 +12,8 @@ mrslam_add_test(run_evaluator_test
 mrslam_add_test(robot_scorer_test
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/robot_scorer_test.cc
   LIBS mrslam_metrics)
+
+# Paper B's metrics of a run, as the experiment grid reports them.
+mrslam_add_test(paper_b_scorer_test
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/paper_b_scorer_test.cc
+  LIBS mrslam_metrics)

@@ -1,0 +1,131 @@
+#include "scripts/batch/filter_accuracy.h"
+
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "common/config/agent_options_projection.h"
+#include "common/se2.h"
+#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/smoother/batch_smoother.h"
+#include "scripts/batch/batch_report.h"
+#include "scripts/batch/oracle_reference.h"
+#include "world_sim/evaluator/metrics.h"
+#include "world_sim/evaluator/robot_scorer.h"
+#include "world_sim/source/step_source_factory.h"
+
+namespace mrslam::batch {
+namespace {
+
+// One robot's estimator in a run: its own filter, or the reference.
+class Estimator {
+ public:
+  Estimator(const common::ScenarioOptions& options, int robot_index, std::uint64_t seed, bool reference) {
+    if (reference) {
+      reference_ = std::make_unique<robot_agent::smoother::BatchSmoother>(OracleSmoother(options, {robot_index}));
+    } else {
+      filter_ =
+          robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, options.robots[robot_index].id), seed);
+      if (!filter_) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
+    }
+  }
+  void Process(const common::SensorStep& step) {
+    if (filter_) {
+      filter_->Process(step);
+    } else {
+      reference_->Process(step);
+    }
+  }
+  // The current pose and map (landmark positions with their identities).
+  struct Output {
+    common::Pose2 pose;
+    std::optional<Eigen::Matrix3d> covariance;  // none from the reference
+    std::vector<evaluator::MapPoint> map;
+  };
+  Output Estimate() const {
+    Output out;
+    if (filter_) {
+      const robot_agent::filters::FilterEstimate e = filter_->Estimate();
+      out.pose = e.pose;
+      out.covariance = e.covariance;
+      for (const auto& l : e.landmarks) out.map.push_back({l.mean.head<2>(), l.landmark_id});
+    } else {
+      out.pose = reference_->Pose();
+      for (const auto& [position, id] : reference_->Landmarks()) out.map.push_back({position, id});
+    }
+    return out;
+  }
+
+ private:
+  std::unique_ptr<robot_agent::filters::SlamFilter> filter_;
+  std::unique_ptr<robot_agent::smoother::BatchSmoother> reference_;
+};
+
+// Runs one seed: the scenario's step source (the simulated World, or the replay of a recorded data
+// set) + one estimator per robot, each scored as the evaluator scores it (RobotScorer); returns the
+// metrics per robot (scenario order).
+std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t seed, bool reference) {
+  options.seed = seed;
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
+  const common::GroundTruth truth0 = source->Truth();
+  const std::size_t n = options.robots.size();
+  std::vector<Estimator> estimators;
+  std::vector<evaluator::RobotScorer> scorers;
+  for (std::size_t i = 0; i < n; ++i) {
+    estimators.emplace_back(options, static_cast<int>(i), seed, reference);
+    const common::Pose2& frame = truth0.frames[i].second;
+    scorers.emplace_back(frame, evaluator::TruthInOwnFrame(truth0.robots[i].pose, frame), options.sensors.lidar);
+  }
+  for (int k = 0; k < options.run.steps; ++k) {
+    const std::vector<common::SensorStep> steps = source->Step();
+    const common::GroundTruth truth = source->Truth();
+    for (std::size_t i = 0; i < n; ++i) {
+      estimators[i].Process(steps[i]);
+      const Estimator::Output e = estimators[i].Estimate();
+      scorers[i].Add(truth, truth.robots[i].pose, e.pose, e.covariance, e.map, &steps[i].odometry);
+    }
+  }
+  std::vector<RobotRun> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const evaluator::RobotSummary s = scorers[i].Summary();
+    out[i] = {s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m};
+  }
+  return out;
+}
+
+}  // namespace
+
+int PrintFilterAccuracy(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds, int threads,
+                        const std::string& json_path, bool reference) {
+  std::vector<std::vector<RobotRun>> results(num_seeds);
+  ForEachSeed(num_seeds, threads, [&](int s) { results[s] = RunSeed(options, first_seed + s, reference); });
+
+  const std::string estimator =
+      reference ? std::string("the MAP reference")
+                : options.filter.type + " with " + std::to_string(options.filter.particles) + " particles";
+  nlohmann::json json = StartReport(options, first_seed, num_seeds, estimator);
+  json["particles"] = options.filter.particles;
+  json["filter"] = reference ? std::string("reference") : options.filter.type;
+  std::printf("%-6s %-24s %10s %10s\n", "robot", "metric", "median", "p90");
+  for (std::size_t i = 0; i < options.robots.size(); ++i) {
+    const std::string& id = options.robots[i].id;
+    for (int m = 0; m < 4; ++m) {
+      std::vector<double> values;
+      values.reserve(results.size());
+      for (const auto& r : results) values.push_back(Metric(r[i], m));
+      const double median = evaluator::Median(values), p90 = evaluator::Percentile(values, 90.0);
+      std::printf("%-6s %-24s %10.3f %10.3f\n", id.c_str(), kMetricNames[m], median, p90);
+      json["robots"][id][kMetricNames[m]] = {{"median", median}, {"p90", p90}, {"values", values}};
+    }
+  }
+  WriteJson(json, json_path);
+  return 0;
+}
+
+}  // namespace mrslam::batch
