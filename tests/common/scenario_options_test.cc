@@ -2,6 +2,7 @@
 #include "tests/test_paths.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 namespace mrslam::common {
 namespace {
@@ -170,6 +172,47 @@ TEST(ApplyOverrideTest, EditsADocumentInPlace) {
   EXPECT_EQ(root["run"]["dt_s"].as<double>(), 0.5);
   EXPECT_EQ(root["run"]["steps"].as<int>(), 3);
   EXPECT_THROW(ApplyOverride(root, "robots.5.id=x"), ScenarioError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The cooperation section.
+
+TEST(CooperationOptions, ParsesDefaultsAndRejectsUnknownKeys) {
+  const char* base = "name: t\nrun: {steps: 10, dt_s: 0.1}\nrobots: [{id: r1, pose: [0, 0, 0]}]\n";
+  ScenarioOptions o = CreateScenarioOptions(YAML::Load(base));
+  EXPECT_EQ(o.cooperation.map_fusion, robot_agent::MapFusionRule::kCovarianceIntersection);
+  EXPECT_TRUE(o.cooperation.merge_maps);
+  EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 256);
+  EXPECT_EQ(o.cooperation.min_seen_span_steps, 6);
+  EXPECT_EQ(o.cooperation.merge_min_separation_m, 1.5);
+  o = CreateScenarioOptions(YAML::Load(std::string(base) +
+                                       "cooperation: {map_fusion: average, merge_maps: false, "
+                                       "max_snapshot_landmarks: 10, cooperative_localization: true, "
+                                       "min_seen_span_steps: 0, merge_min_separation_m: 0}\n"));
+  EXPECT_EQ(o.cooperation.map_fusion, robot_agent::MapFusionRule::kAverage);
+  EXPECT_FALSE(o.cooperation.merge_maps);
+  EXPECT_EQ(o.cooperation.max_snapshot_landmarks, 10);
+  EXPECT_TRUE(o.cooperation.cooperative_localization);
+  EXPECT_EQ(o.cooperation.min_seen_span_steps, 0);
+  EXPECT_EQ(o.cooperation.merge_min_separation_m, 0.0);
+  EXPECT_THROW(CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {fusion: x}\n")), ScenarioError);
+  EXPECT_THROW(CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {map_fusion: x}\n")), ScenarioError);
+  o = CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {max_snapshot_landmarks: 0}\n"));
+  std::string error;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("cooperation.max_snapshot_landmarks"), std::string::npos);
+  o = CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {min_seen_span_steps: -1}\n"));
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("cooperation.min_seen_span_steps"), std::string::npos);
+  o = CreateScenarioOptions(YAML::Load(std::string(base) + "cooperation: {merge_min_separation_m: -1}\n"));
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("cooperation.merge_min_separation_m"), std::string::npos);
+  o = CreateScenarioOptions(YAML::Load(std::string(base) + "filter: {max_landmark_position_sd_m: .inf}\n"));
+  EXPECT_TRUE(std::isinf(o.filter.max_landmark_position_sd_m));
+  EXPECT_TRUE(o.IsValid(&error));
+  o = CreateScenarioOptions(YAML::Load(std::string(base) + "filter: {max_landmark_position_sd_m: 0}\n"));
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("filter.max_landmark_position_sd_m"), std::string::npos);
 }
 
 }  // namespace

@@ -1,11 +1,21 @@
 # Cooperation among robots: rendezvous maths (transform from mutual detections, chaining, split
 # covariance intersection), map fusion rules and matching, the agents' protocol in process
-# (rendezvous, snapshots, transitive frames) and the rejection of hostile peer input.
+# (rendezvous, snapshots, transitive frames), the rejection of hostile peer input and FastSLAM's
+# merge of a peer's map.
 mrslam_add_test(map_fusion_test
   SOURCES map_fusion_test.cc
   LIBS mrslam_agent_filters)
+mrslam_add_test(rendezvous_test
+  SOURCES rendezvous_test.cc
+  LIBS mrslam_agent_cooperation)
 mrslam_add_test(cooperation_test
   SOURCES cooperation_test.cc
+  LIBS mrslam_agent_cooperation mrslam_config)
+mrslam_add_test(peer_input_test
+  SOURCES peer_input_test.cc
+  LIBS mrslam_agent_cooperation mrslam_config)
+mrslam_add_test(fastslam_merge_test
+  SOURCES fastslam_merge_test.cc
   LIBS mrslam_agent_cooperation mrslam_config)
 mrslam_add_test(joint_transform_test
   SOURCES joint_transform_test.cc
