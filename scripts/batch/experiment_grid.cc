@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -46,6 +47,7 @@
 #include "robot_agent/node/msg_conversion.h"
 #include "scripts/launch/domain_picker.h"
 #include "scripts/launch/process_supervisor.h"
+#include "scripts/launch/simulation_run.h"
 #include "world_sim/core/world.h"
 #include "world_sim/evaluator/paper_b_scorer.h"
 
@@ -171,9 +173,78 @@ struct MultiProcessSetup {
   std::string log_dir;
 };
 
+// What a multi-process run publishes, read over DDS: the truth and every robot's estimates, by
+// step. Its readers join the domain at construction, before the run's processes start.
+class RunReader {
+ public:
+  RunReader(int domain, const common::ScenarioOptions& options)
+      : participant_({domain, "mrslam_grid", false}),
+        truth_reader_(participant_, dds::kTruthTopic),
+        estimates_(options.robots.size()) {
+    for (const auto& robot : options.robots) {
+      ids_.push_back(robot.id);
+      estimate_readers_.push_back(
+          std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant_, dds::EstimateTopic(robot.id)));
+    }
+  }
+
+  // Takes what has arrived, waiting up to `wait` for the truth; returns whether anything had.
+  bool Drain(std::chrono::milliseconds wait) {
+    bool any = false;
+    msg::GroundTruth t;
+    while (truth_reader_.Take(&t, wait)) {
+      truth_[t.stamp().step()] = dds::FromMsg(t);
+      any = true;
+    }
+    for (std::size_t i = 0; i < estimate_readers_.size(); ++i) {
+      msg::Estimate e;
+      while (estimate_readers_[i]->TryTake(&e)) {
+        estimates_[i][e.stamp().step()] = robot_agent::FromMsg(e);
+        any = true;
+      }
+    }
+    return any;
+  }
+
+  // Feeds steps 1..frames to the scorer; a step without its truth or an estimate throws.
+  void Score(int frames, evaluator::PaperBScorer* scorer) const {
+    std::vector<robot_agent::filters::FilterEstimate> frame(estimates_.size());
+    for (int k = 1; k <= frames; ++k) {
+      const auto step = static_cast<std::uint32_t>(k);
+      if (!truth_.count(step)) throw std::runtime_error("no truth for step " + std::to_string(k));
+      for (std::size_t i = 0; i < estimates_.size(); ++i) {
+        const auto it = estimates_[i].find(step);
+        if (it == estimates_[i].end()) {
+          throw std::runtime_error("no estimate of " + ids_[i] + " for step " + std::to_string(k));
+        }
+        frame[i] = it->second;
+      }
+      scorer->AddFrame(truth_.at(step), Reports(frame));
+    }
+  }
+
+ private:
+  dds::Participant participant_;
+  dds::Reader<msg::GroundTruthPubSubType> truth_reader_;
+  std::vector<std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimate_readers_;
+  std::vector<std::string> ids_;
+  std::map<std::uint32_t, common::GroundTruth> truth_;
+  std::vector<std::map<std::uint32_t, robot_agent::filters::FilterEstimate>> estimates_;
+};
+
+// The scenario overrides of a multi-process job: the setup's, then the job's filter and cell.
+std::vector<std::string> JobOverrides(const MultiProcessSetup& setup, const Job& job, int frames) {
+  std::vector<std::string> sets = setup.overrides;
+  sets.push_back("filter.type=" + job.filter);
+  sets.push_back("landmark_field.moving_fraction=" + std::to_string(kDynamism[job.dynamism_index]));
+  sets.push_back("landmark_field.speed_mps=" + std::to_string(kSpeeds[job.speed_index]));
+  sets.push_back("run.steps=" + std::to_string(frames));
+  return sets;
+}
+
 // One job as separate processes: world_sim and one robot_agent per robot on a free DDS domain,
-// in lockstep; this process reads the truth and the estimates over DDS and scores them like an
-// in-process run.
+// in lockstep, started and supervised as the launcher does (scripts/launch/simulation_run.h);
+// this process reads the truth and the estimates over DDS and scores them like an in-process run.
 Row RunJobMultiProcess(const common::ScenarioOptions& base, const MultiProcessSetup& setup, const Job& job,
                        int frames) {
   const auto start = std::chrono::steady_clock::now();
@@ -181,88 +252,29 @@ Row RunJobMultiProcess(const common::ScenarioOptions& base, const MultiProcessSe
   const launch::DomainReservation held = launch::PickFreeDomain(getpid());  // until the run's processes are gone
   const int domain = held.domain();
   if (domain < 0) throw std::runtime_error("no free DDS domain");
-  dds::Participant participant({domain, "mrslam_grid", false});
-  dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic);
-  std::vector<std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimate_readers;
-  for (const auto& robot : options.robots) {
-    estimate_readers.push_back(
-        std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(robot.id)));
-  }
-
-  std::vector<std::string> args = {"--scenario", setup.scenario_path,    "--domain", std::to_string(domain),
-                                   "--seed",     std::to_string(job.run)};
-  std::vector<std::string> sets = setup.overrides;
-  sets.push_back("filter.type=" + job.filter);
-  sets.push_back("landmark_field.moving_fraction=" + std::to_string(kDynamism[job.dynamism_index]));
-  sets.push_back("landmark_field.speed_mps=" + std::to_string(kSpeeds[job.speed_index]));
-  sets.push_back("run.steps=" + std::to_string(frames));
-  for (const auto& o : sets) args.insert(args.end(), {"--set", o});
-  const std::string bin = launch::ExecutableDir();
+  RunReader reader(domain, options);
+  const launch::RunArgs run{setup.scenario_path, domain, job.run, JobOverrides(setup, job, frames), false, ""};
   const std::string logs = setup.log_dir + "/" + job.filter + "-d" + std::to_string(job.dynamism_index) + "-s" +
                            std::to_string(job.speed_index) + "-run" + std::to_string(job.run) + "-";
+  std::vector<std::string> robot_ids;
+  for (const auto& robot : options.robots) robot_ids.push_back(robot.id);
   launch::ProcessSupervisor children;
-  auto command = [&](const std::string& exe, const std::vector<std::string>& more) {
-    std::vector<std::string> argv = {bin + "/" + exe};
-    argv.insert(argv.end(), args.begin(), args.end());
-    argv.insert(argv.end(), more.begin(), more.end());
-    return argv;
-  };
-  for (const auto& robot : options.robots) {
-    children.Start(robot.id, command("robot_agent", {"--robot", robot.id, "--wait-readers", "1"}),
-                   logs + robot.id + ".log");
+  launch::StartSimulation(&children, run, robot_ids, 1, 1, logs);
+  const std::atomic<bool> never{false};
+  const launch::RunEnd end = launch::SuperviseRun(&children, {start, 60.0 + frames}, never,
+                                                  [&] { reader.Drain(std::chrono::milliseconds(20)); });
+  if (end.kind != launch::RunEnd::Kind::kDone) {
+    children.StopAll(std::chrono::seconds(2));
+    if (end.failure) {
+      throw std::runtime_error(end.failure->name + " " + end.failure->Describe() + "; log: " + end.failure->log_path);
+    }
+    throw std::runtime_error("a multi-process run did not finish within " + std::to_string(60 + frames) +
+                             " s; logs: " + logs + "*.log");
   }
-  children.Start("world_sim", command("world_sim", {"--wait-readers", "1"}), logs + "world_sim.log");
-
-  std::map<std::uint32_t, common::GroundTruth> truth;
-  std::vector<std::map<std::uint32_t, robot_agent::filters::FilterEstimate>> estimates(options.robots.size());
-  const auto drain = [&](std::chrono::milliseconds wait) {
-    bool any = false;
-    msg::GroundTruth t;
-    while (truth_reader.Take(&t, wait)) {
-      truth[t.stamp().step()] = dds::FromMsg(t);
-      any = true;
-    }
-    for (std::size_t i = 0; i < estimate_readers.size(); ++i) {
-      msg::Estimate e;
-      while (estimate_readers[i]->TryTake(&e)) {
-        estimates[i][e.stamp().step()] = robot_agent::FromMsg(e);
-        any = true;
-      }
-    }
-    return any;
-  };
-  const auto deadline = start + std::chrono::seconds(60 + frames);
-  while (children.running() > 0) {
-    drain(std::chrono::milliseconds(20));
-    for (const launch::ChildExit& exit : children.Reap()) {
-      if (!exit.ok()) {
-        children.StopAll(std::chrono::seconds(2));
-        throw std::runtime_error(exit.name + " " + exit.Describe() + "; log: " + exit.log_path);
-      }
-    }
-    if (std::chrono::steady_clock::now() > deadline) {
-      children.StopAll(std::chrono::seconds(2));
-      throw std::runtime_error("a multi-process run took longer than " + std::to_string(60 + frames) +
-                               " s; logs: " + logs + "*.log");
-    }
+  while (reader.Drain(std::chrono::milliseconds(300))) {
   }
-  while (drain(std::chrono::milliseconds(300))) {
-  }
-
   evaluator::PaperBScorer scorer = MakeScorer(options);
-  std::vector<robot_agent::filters::FilterEstimate> frame(options.robots.size());
-  for (int k = 1; k <= frames; ++k) {
-    const auto step = static_cast<std::uint32_t>(k);
-    if (!truth.count(step)) throw std::runtime_error("no truth for step " + std::to_string(k));
-    for (std::size_t i = 0; i < estimates.size(); ++i) {
-      const auto it = estimates[i].find(step);
-      if (it == estimates[i].end()) {
-        throw std::runtime_error("no estimate of " + options.robots[i].id + " for step " + std::to_string(k));
-      }
-      frame[i] = it->second;
-    }
-    scorer.AddFrame(truth.at(step), Reports(frame));
-  }
+  reader.Score(frames, &scorer);
   return Finish(scorer, SecondsSince(start));
 }
 

@@ -29,6 +29,7 @@
 #include "scripts/launch/process_supervisor.h"
 #include "scripts/launch/progress_monitor.h"
 #include "scripts/launch/run_report.h"
+#include "scripts/launch/simulation_run.h"
 
 namespace mrslam::launch {
 namespace {
@@ -97,20 +98,10 @@ class ProgressPrinter {
 };
 
 // The flags every child gets: --scenario --domain --seed --set... [--shm] [--log-level].
-std::vector<std::string> CommonChildArgs(const LaunchFlags& flags, const std::string& scenario_path, int domain,
-                                         long long seed) {
-  std::vector<std::string> args = {"--scenario",           scenario_path, "--domain",
-                                   std::to_string(domain), "--seed",      std::to_string(seed)};
-  for (const auto& o : flags.common.overrides) {
-    args.push_back("--set");
-    args.push_back(o);
-  }
-  if (flags.common.shared_memory) args.push_back("--shm");
-  if (flags.log_level_given) {
-    args.push_back("--log-level");
-    args.push_back(flags.common.log_level);
-  }
-  return args;
+RunArgs ChildArgs(const LaunchFlags& flags, const std::string& scenario_path, int domain, long long seed) {
+  RunArgs run{scenario_path, domain, seed, flags.common.overrides, flags.common.shared_memory, ""};
+  if (flags.log_level_given) run.log_level = flags.common.log_level;
+  return run;
 }
 
 void ReportFailure(const ChildExit& failure, const std::string& what_else) {
@@ -174,118 +165,53 @@ std::vector<std::string> RunPlots(const std::string& dir, const std::atomic<bool
   return written;
 }
 
-// Runs one seed into dir. Returns kOk (and the summary), kFailed or kStopped.
-int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, const std::string& scenario_path,
-            long long seed, int domain, const std::string& dir, const std::string& progress_prefix,
-            const std::atomic<bool>& stop, json* summary_out) {
-  fs::create_directories(dir + "/logs");
-  fs::remove(dir + "/summary.json");  // a stale summary must not pass for this run's
-  const std::string bin = ExecutableDir();
-  const auto common_args = CommonChildArgs(flags, scenario_path, domain, seed);
-  auto command = [&](const std::string& exe, std::vector<std::string> extra) {
-    std::vector<std::string> argv = {bin + "/" + exe};
-    argv.insert(argv.end(), common_args.begin(), common_args.end());
-    argv.insert(argv.end(), extra.begin(), extra.end());
-    return argv;
-  };
+// Stops what still runs of a run that did not end well and says why.
+void ReportEnd(const RunEnd& end, const RunLimits& limits, ProcessSupervisor* children, const std::string& dir) {
+  const auto others = children->RunningNames();
+  if (end.kind == RunEnd::Kind::kStopped) {
+    std::cerr << kName << ": interrupted: stopping " << JoinNames(others) << "\n";
+    children->StopAll(kStopGrace);
+    return;
+  }
+  children->StopAll(kStopGrace);
+  if (end.kind == RunEnd::Kind::kFailed) {
+    ReportFailure(*end.failure, others.empty() ? "" : "; stopped " + JoinNames(others));
+    return;
+  }
+  const std::string timeout =
+      end.kind == RunEnd::Kind::kTimedOut
+          ? "the run did not finish within --timeout-s " + FormatSeconds(limits.timeout_s)
+          : "world_sim finished but the others did not within " + FormatSeconds(Seconds(limits.drain_timeout));
+  std::cerr << kName << ": error: " << timeout << " (still running: " << JoinNames(others) << "); logs in " << dir
+            << "/logs\n";
+}
 
-  const auto start = Clock::now();
-  std::vector<std::string> robot_ids;
-  for (const auto& r : scenario.robots) robot_ids.push_back(r.id);
-  // The monitor joins first, to see the evaluator join.
-  std::unique_ptr<ProgressMonitor> monitor;
-  try {
-    monitor = std::make_unique<ProgressMonitor>(domain, flags.common.shared_memory, robot_ids);
-  } catch (const std::exception& e) {
-    std::cerr << kName << ": warning: no progress display (" << e.what() << ")\n";
-  }
-  ProcessSupervisor children;
-  // The evaluator first, and the others only once it is in the domain: it is not part of the
-  // lockstep barrier, so a short run could otherwise end (and its writers go away) before it joins.
-  children.Start("evaluator", command("evaluator", {"--out", dir}), dir + "/logs/evaluator.log");
-  if (monitor) {
-    const auto deadline = Clock::now() + kEvaluatorJoinTimeout;
-    while (!monitor->HasSeenParticipant("evaluator") && Clock::now() < deadline && !stop) {
-      const auto ended = children.Reap();
-      if (!ended.empty()) {  // the evaluator ended before the run began
-        ReportFailure(ended.front(), "");
-        return kFailed;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+// Starts the evaluator and waits until it is in the domain (the monitor sees it), before the others:
+// it is not part of the lockstep barrier, so a short run could otherwise end (and its writers go
+// away) before it joins. Returns false, reported, if the evaluator ended first.
+bool StartEvaluator(ProcessSupervisor* children, const RunArgs& run, ProgressMonitor* monitor, const std::string& dir,
+                    const std::atomic<bool>& stop) {
+  children->Start("evaluator", ChildCommand(run, "evaluator", {"--out", dir}), dir + "/logs/evaluator.log");
+  if (!monitor) return true;
+  const auto deadline = Clock::now() + kEvaluatorJoinTimeout;
+  while (!monitor->HasSeenParticipant("evaluator") && Clock::now() < deadline && !stop) {
+    const auto ended = children->Reap();
+    if (!ended.empty()) {  // the evaluator ended before the run began
+      ReportFailure(ended.front(), "");
+      return false;
     }
-    if (!monitor->HasSeenParticipant("evaluator") && !stop) {
-      std::cerr << kName << ": warning: the evaluator has not joined DDS domain " << domain << " after "
-                << FormatSeconds(Seconds(kEvaluatorJoinTimeout)) << "; starting the others anyway\n";
-    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  // Then the agents, then the simulator (it waits for every agent's "ready").
-  for (const auto& robot : scenario.robots) {
-    const std::string name = "robot_agent_" + robot.id;
-    // The evaluator (and the progress monitor) must read every estimate: wait for them.
-    std::string log = dir;
-    log.append("/logs/").append(name).append(".log");
-    children.Start(name, command("robot_agent", {"--robot", robot.id, "--wait-readers", monitor ? "2" : "1"}), log);
+  if (!monitor->HasSeenParticipant("evaluator") && !stop) {
+    std::cerr << kName << ": warning: the evaluator has not joined DDS domain " << run.domain << " after "
+              << FormatSeconds(Seconds(kEvaluatorJoinTimeout)) << "; starting the others anyway\n";
   }
-  children.Start("world_sim", command("world_sim", {"--wait-readers", "1"}), dir + "/logs/world_sim.log");
+  return true;
+}
 
-  ProgressPrinter printer(progress_prefix);
-  std::optional<Clock::time_point> first_step_at;
-  std::optional<Clock::time_point> world_done_at;
-  const int total_steps = scenario.run.steps;
-  while (true) {
-    if (stop) {
-      printer.Finish();
-      std::cerr << kName << ": interrupted: stopping " << JoinNames(children.RunningNames()) << "\n";
-      monitor.reset();
-      children.StopAll(kStopGrace);
-      return kStopped;
-    }
-    std::optional<ChildExit> failure;
-    for (auto& e : children.Reap()) {
-      if (!e.ok() && !failure) failure = e;
-      if (e.ok() && e.name == "world_sim") world_done_at = Clock::now();
-    }
-    if (failure) {
-      printer.Finish();
-      monitor.reset();
-      const auto others = children.RunningNames();
-      children.StopAll(kStopGrace);
-      ReportFailure(*failure, others.empty() ? "" : "; stopped " + JoinNames(others));
-      return kFailed;
-    }
-    if (children.running() == 0) break;
-    const auto now = Clock::now();
-    std::string timeout;
-    if (flags.timeout_s > 0 && Seconds(now - start) > flags.timeout_s) {
-      timeout = "the run did not finish within --timeout-s " + FormatSeconds(flags.timeout_s);
-    } else if (world_done_at && now - *world_done_at > kDrainTimeout) {
-      timeout = "world_sim finished but the others did not within " + FormatSeconds(Seconds(kDrainTimeout));
-    }
-    if (!timeout.empty()) {
-      printer.Finish();
-      monitor.reset();
-      const auto others = children.RunningNames();
-      children.StopAll(kStopGrace);
-      std::cerr << kName << ": error: " << timeout << " (still running: " << JoinNames(others) << "); logs in " << dir
-                << "/logs\n";
-      return kFailed;
-    }
-    if (monitor) {
-      const Progress p = monitor->Poll();
-      if (p.steps_done > 0 && !first_step_at) first_step_at = now;
-      std::optional<double> left;
-      if (first_step_at && p.steps_done > 1) {
-        const double per_step = Seconds(now - *first_step_at) / (p.steps_done - 1);
-        left = per_step * std::max(0, total_steps - p.steps_done);
-      }
-      printer.Show(p, total_steps, Seconds(now - start), left);
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  printer.Finish();
-  monitor.reset();
-  const double wall_s = Seconds(Clock::now() - start);
-
+// Reads the summary the evaluator wrote into dir, adds the run's wall time and DDS domain, and
+// writes it back. Returns kOk (and the summary) or kFailed.
+int FinishSummary(const std::string& dir, double wall_s, int domain, json* summary_out) {
   const std::string summary_path = dir + "/summary.json";
   std::ifstream in(summary_path);
   if (!in) {
@@ -314,6 +240,58 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   }
   *summary_out = summary;
   return kOk;
+}
+
+// Runs one seed into dir. Returns kOk (and the summary), kFailed or kStopped.
+int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, const std::string& scenario_path,
+            long long seed, int domain, const std::string& dir, const std::string& progress_prefix,
+            const std::atomic<bool>& stop, json* summary_out) {
+  fs::create_directories(dir + "/logs");
+  fs::remove(dir + "/summary.json");  // a stale summary must not pass for this run's
+  const RunArgs run = ChildArgs(flags, scenario_path, domain, seed);
+
+  const auto start = Clock::now();
+  std::vector<std::string> robot_ids;
+  for (const auto& r : scenario.robots) robot_ids.push_back(r.id);
+  // The monitor joins first, to see the evaluator join.
+  std::unique_ptr<ProgressMonitor> monitor;
+  try {
+    monitor = std::make_unique<ProgressMonitor>(domain, flags.common.shared_memory, robot_ids);
+  } catch (const std::exception& e) {
+    std::cerr << kName << ": warning: no progress display (" << e.what() << ")\n";
+  }
+  ProcessSupervisor children;
+  if (!StartEvaluator(&children, run, monitor.get(), dir, stop)) return kFailed;
+  // Then the agents, then the simulator (it waits for every agent's "ready"). The evaluator (and
+  // the progress monitor) must read every estimate: the agents wait for them.
+  StartSimulation(&children, run, robot_ids, monitor ? 2 : 1, 1, dir + "/logs/");
+
+  ProgressPrinter printer(progress_prefix);
+  std::optional<Clock::time_point> first_step_at;
+  const int total_steps = scenario.run.steps;
+  const auto show_progress = [&] {
+    if (monitor) {
+      const auto now = Clock::now();
+      const Progress p = monitor->Poll();
+      if (p.steps_done > 0 && !first_step_at) first_step_at = now;
+      std::optional<double> left;
+      if (first_step_at && p.steps_done > 1) {
+        const double per_step = Seconds(now - *first_step_at) / (p.steps_done - 1);
+        left = per_step * std::max(0, total_steps - p.steps_done);
+      }
+      printer.Show(p, total_steps, Seconds(now - start), left);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  };
+  const RunLimits limits{start, flags.timeout_s, kDrainTimeout};
+  const RunEnd end = SuperviseRun(&children, limits, stop, show_progress);
+  printer.Finish();
+  monitor.reset();
+  if (end.kind != RunEnd::Kind::kDone) {
+    ReportEnd(end, limits, &children, dir);
+    return end.kind == RunEnd::Kind::kStopped ? kStopped : kFailed;
+  }
+  return FinishSummary(dir, Seconds(Clock::now() - start), domain, summary_out);
 }
 
 int Main(const LaunchFlags& flags) {

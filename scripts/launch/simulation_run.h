@@ -1,0 +1,59 @@
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scripts/launch/process_supervisor.h"
+
+// One simulation run as separate processes, as the launcher and mrslam_grid --multi-process run
+// it: the command lines, starting world_sim and one robot_agent per robot, and supervising them
+// to their end.
+namespace mrslam::launch {
+
+// What every process of a run gets: --scenario --domain --seed --set... [--shm] [--log-level].
+struct RunArgs {
+  std::string scenario_path;
+  int domain = 0;
+  long long seed = 0;
+  std::vector<std::string> overrides;
+  bool shared_memory = false;
+  std::string log_level;  // empty: each process's default
+};
+
+// The command line of one of the run's processes: the executable beside this one, the run's
+// flags, then extra.
+std::vector<std::string> ChildCommand(const RunArgs& run, const std::string& executable,
+                                      const std::vector<std::string>& extra);
+
+// Starts one robot_agent per robot (named robot_agent_<id>, each waiting until estimate_readers
+// readers match its estimate topic), then world_sim (which waits for every agent's "ready" and
+// for truth_readers readers of the truth). Each log is log_prefix + name + ".log".
+void StartSimulation(ProcessSupervisor* children, const RunArgs& run, const std::vector<std::string>& robot_ids,
+                     int estimate_readers, int truth_readers, const std::string& log_prefix);
+
+// The limits of a run: all of it from start (0: none), and how long the others may take to
+// finish once world_sim has.
+struct RunLimits {
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  double timeout_s = 0.0;
+  std::chrono::seconds drain_timeout{120};
+};
+
+// How a supervised run ended. Unless kDone, children may still run: the caller stops them.
+struct RunEnd {
+  enum class Kind { kDone, kFailed, kTimedOut, kDrainTimedOut, kStopped };
+  Kind kind = Kind::kDone;
+  std::optional<ChildExit> failure;  // kFailed: the first child that failed
+};
+
+// Watches the children until every one has ended, one has failed, a limit has run out or stop
+// has been raised. tick() runs between the checks: the caller's reading and progress, which
+// also paces the loop (it should wait a few milliseconds).
+RunEnd SuperviseRun(ProcessSupervisor* children, const RunLimits& limits, const std::atomic<bool>& stop,
+                    const std::function<void()>& tick);
+
+}  // namespace mrslam::launch
