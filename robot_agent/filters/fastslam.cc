@@ -72,6 +72,41 @@ double HeadingCovOf(const LandmarkBlock<D>& b, int i, int l) {  // cov(i, headin
   return 0.0;
 }
 
+// One track's weighted sums over the particles that hold it (FastSlam::MapEstimate).
+struct TrackAccumulator {
+  double weight = 0.0, heading_weight = 0.0, tentative_weight = 0.0, moving_weight = 0.0;
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  double c = 0.0, s = 0.0, v = 0.0, v_var = 0.0, w = 0.0;
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+  std::uint32_t first_seen = std::numeric_limits<std::uint32_t>::max();
+  MapLandmark out;
+};
+
+// The map's landmark of track id from its accumulated sums, for a state of dimension dim.
+MapLandmark TrackLandmark(std::uint32_t id, const TrackAccumulator& a, int dim) {
+  MapLandmark m = a.out;
+  m.track_id = id;
+  m.covariance = a.second;
+  if (a.heading_weight <= 0.0) m.covariance(2, 2) = kUnknownHeadingVar;
+  m.covariance(2, 0) = m.covariance(0, 2);
+  m.covariance(2, 1) = m.covariance(1, 2);
+  // Constant turn rate: static when the particles that take it as static carry more than
+  // half of its holders' weight.
+  m.motion = dim == 2 || a.moving_weight < 0.5 * a.weight ? LandmarkMotionKind::kStatic
+             : dim == 3                                   ? LandmarkMotionKind::kUnicycle
+                                                          : LandmarkMotionKind::kConstantTurnRate;
+  if (a.heading_weight > 0.0) {
+    m.v_mps = a.v / a.heading_weight;
+    m.w_radps = a.w / a.heading_weight;
+    // Known models move when their speed is not zero; an estimated speed must stand out of
+    // its own uncertainty (two standard deviations).
+    const double v_sd = std::sqrt(a.v_var / a.heading_weight);
+    m.moving = std::abs(m.v_mps) > 2.0 * v_sd;
+  }
+  m.tentative = a.tentative_weight > 0.5 * a.weight;
+  return m;
+}
+
 }  // namespace
 
 template <int D>
@@ -500,37 +535,13 @@ void FastSlam<D>::StartFullState(Block* block, int lane, const Pose2& pose, cons
     Eigen::Vector2d cov_p_theta = p2_cov * j_theta.transpose();
 
     if constexpr (D == 3) {
-      // Candidate model, sampled by the likelihood of the displacement length:
-      //   P(c) ~ exp(-(|delta| - chord_c)^2 / (2 u^T C_delta u)).
-      const auto& candidates = filter_.known_kinematics;
-      const double var_len = u.dot(delta_cov * u);
-      std::vector<double> log_l(candidates.size());
-      for (std::size_t c = 0; c < candidates.size(); ++c) {
-        const double e = length - ChordLength(candidates[c].v_mps, candidates[c].w_radps, dt, n);
-        log_l[c] = -0.5 * e * e / var_len;
-      }
-      const std::vector<double> prob = NormalizeLogWeights(&log_l);
-      double pick = rng_.Uniform();
-      std::size_t c = 0;
-      while (c + 1 < prob.size() && pick >= prob[c]) pick -= prob[c++];
       // The chord's direction is the heading halfway through the turn of the n steps.
-      heading += 0.5 * (n - 1) * candidates[c].w_radps * dt;
-      block->field[Block::kParamV][lane] = candidates[c].v_mps;
-      block->field[Block::kParamW][lane] = candidates[c].w_radps;
-      meta.candidate = static_cast<std::int8_t>(c);
+      const std::size_t c = PickCandidate(block, lane, length, u.dot(delta_cov * u), n);
+      heading += 0.5 * (n - 1) * filter_.known_kinematics[c].w_radps * dt;
     }
     if constexpr (D == 5) {
       if (SampleStationary(delta, delta_cov, n)) {
-        // Static: both sightings see one point, fused; no heading, speed or turn rate.
-        const Eigen::Matrix2d i1 = p1_cov.inverse(), i2 = p2_cov.inverse();
-        const Eigen::Matrix2d p = (i1 + i2).inverse();
-        mean.template head<2>() = p * (i1 * p1 + i2 * p2);
-        cov.setZero();
-        cov.template topLeftCorner<2, 2>() = 0.5 * (p + p.transpose());
-        cov(2, 2) = kUnknownHeadingVar;
-        block->Set(lane, mean, cov);
-        meta.position_only = false;
-        meta.stationary = true;
+        StartStationary(block, lane, p1, p1_cov, p2, p2_cov);
         return;
       }
       // v = |delta| / (n dt); w unknown: prior N(0, sd_w^2); heading = chord + (n - 1) w dt / 2.
@@ -560,6 +571,42 @@ void FastSlam<D>::StartFullState(Block* block, int lane, const Pose2& pose, cons
     block->Set(lane, mean, cov);
     meta.position_only = false;
   }
+}
+
+template <int D>
+std::size_t FastSlam<D>::PickCandidate(Block* block, int lane, double length, double var_len, int n) {
+  // P(c) ~ exp(-(|delta| - chord_c)^2 / (2 u^T C_delta u)).
+  const auto& candidates = filter_.known_kinematics;
+  std::vector<double> log_l(candidates.size());
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    const double e = length - ChordLength(candidates[c].v_mps, candidates[c].w_radps, step_dt_s_, n);
+    log_l[c] = -0.5 * e * e / var_len;
+  }
+  const std::vector<double> prob = NormalizeLogWeights(&log_l);
+  double pick = rng_.Uniform();
+  std::size_t c = 0;
+  while (c + 1 < prob.size() && pick >= prob[c]) pick -= prob[c++];
+  if constexpr (D == 3) {
+    block->field[Block::kParamV][lane] = candidates[c].v_mps;
+    block->field[Block::kParamW][lane] = candidates[c].w_radps;
+  }
+  block->meta[lane].candidate = static_cast<std::int8_t>(c);
+  return c;
+}
+
+template <int D>
+void FastSlam<D>::StartStationary(Block* block, int lane, const Eigen::Vector2d& p1, const Eigen::Matrix2d& p1_cov,
+                                  const Eigen::Vector2d& p2, const Eigen::Matrix2d& p2_cov) {
+  const Eigen::Matrix2d i1 = p1_cov.inverse(), i2 = p2_cov.inverse();
+  const Eigen::Matrix2d p = (i1 + i2).inverse();
+  StateVector<D> mean = StateVector<D>::Zero();
+  StateMatrix<D> cov = StateMatrix<D>::Zero();
+  mean.template head<2>() = p * (i1 * p1 + i2 * p2);
+  cov.template topLeftCorner<2, 2>() = 0.5 * (p + p.transpose());
+  if constexpr (D > 2) cov(2, 2) = kUnknownHeadingVar;
+  block->Set(lane, mean, cov);
+  block->meta[lane].position_only = false;
+  block->meta[lane].stationary = true;
 }
 
 template <int D>
@@ -677,23 +724,20 @@ FilterEstimate FastSlam<D>::Estimate() const {
   e.covariance = pose_covariance_;
   e.labels_detections = true;
   e.detection_tracks = detection_tracks_;
+  e.landmarks = MapEstimate();
+  return e;
+}
+
+template <int D>
+std::vector<MapLandmark> FastSlam<D>::MapEstimate() const {
   std::vector<double> w(NumParticles());
   double sw = 0.0;
   for (int p = 0; p < NumParticles(); ++p) {
     w[p] = std::exp(log_weights_[p]);
     sw += w[p];
   }
-
-  // Map: per track id, the weight of its holders and weighted sums (see the class comment).
-  struct Accumulator {
-    double weight = 0.0, heading_weight = 0.0, tentative_weight = 0.0, moving_weight = 0.0;
-    Eigen::Vector2d xy = Eigen::Vector2d::Zero();
-    double c = 0.0, s = 0.0, v = 0.0, v_var = 0.0, w = 0.0;
-    Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
-    std::uint32_t first_seen = std::numeric_limits<std::uint32_t>::max();
-    MapLandmark out;
-  };
-  std::map<std::uint32_t, Accumulator> tracks;
+  // Per track id, the weight of its holders and weighted sums (see the class comment).
+  std::map<std::uint32_t, TrackAccumulator> tracks;
   auto for_each_landmark = [&](auto&& fn) {
     for (int p = 0; p < NumParticles(); ++p) {
       const Particle& particle = particles_[p];
@@ -702,7 +746,7 @@ FilterEstimate FastSlam<D>::Estimate() const {
   };
   auto has_heading = [](const Block& b, int l) { return D > 2 && !b.meta[l].position_only; };
   for_each_landmark([&](double wp, const Block& b, int l) {
-    Accumulator& a = tracks[b.meta[l].track_id];
+    TrackAccumulator& a = tracks[b.meta[l].track_id];
     a.weight += wp;
     a.xy += wp * Eigen::Vector2d(b.Mean(0, l), b.Mean(1, l));
     if (b.meta[l].sightings < filter_.confirm_sightings) a.tentative_weight += wp;
@@ -727,7 +771,7 @@ FilterEstimate FastSlam<D>::Estimate() const {
     a.out.mean(2) = a.heading_weight > 0.0 ? std::atan2(a.s, a.c) : 0.0;
   }
   for_each_landmark([&](double wp, const Block& b, int l) {
-    Accumulator& a = tracks[b.meta[l].track_id];
+    TrackAccumulator& a = tracks[b.meta[l].track_id];
     const Eigen::Vector2d d(b.Mean(0, l) - a.out.mean(0), b.Mean(1, l) - a.out.mean(1));
     Eigen::Matrix2d p;
     p << b.Cov(0, 0, l), b.Cov(0, 1, l), b.Cov(0, 1, l), b.Cov(1, 1, l);
@@ -740,31 +784,12 @@ FilterEstimate FastSlam<D>::Estimate() const {
       a.second(1, 2) += wh * (HeadingCovOf(b, 1, l) + d.y() * dh);
     }
   });
-  for (auto& [id, a] : tracks) {
+  std::vector<MapLandmark> map;
+  for (const auto& [id, a] : tracks) {
     if (a.weight <= 0.5 * sw) continue;  // held by at most half of the weight
-    MapLandmark& m = a.out;
-    m.track_id = id;
-    m.covariance = a.second;
-    if (a.heading_weight <= 0.0) m.covariance(2, 2) = kUnknownHeadingVar;
-    m.covariance(2, 0) = m.covariance(0, 2);
-    m.covariance(2, 1) = m.covariance(1, 2);
-    // Constant turn rate: static when the particles that take it as static carry more than
-    // half of its holders' weight.
-    m.motion = D == 2 || a.moving_weight < 0.5 * a.weight ? LandmarkMotionKind::kStatic
-               : D == 3                                   ? LandmarkMotionKind::kUnicycle
-                                                          : LandmarkMotionKind::kConstantTurnRate;
-    if (a.heading_weight > 0.0) {
-      m.v_mps = a.v / a.heading_weight;
-      m.w_radps = a.w / a.heading_weight;
-      // Known models move when their speed is not zero; an estimated speed must stand out of
-      // its own uncertainty (two standard deviations).
-      const double v_sd = std::sqrt(a.v_var / a.heading_weight);
-      m.moving = std::abs(m.v_mps) > 2.0 * v_sd;
-    }
-    m.tentative = a.tentative_weight > 0.5 * a.weight;
-    e.landmarks.push_back(m);
+    map.push_back(TrackLandmark(id, a, D));
   }
-  return e;
+  return map;
 }
 
 template <int D>

@@ -176,11 +176,20 @@ class FastSlam : public SlamFilter {
   void CountMisses(int p);
   void Resample(const std::vector<double>& weights);
   void EstimatePose(const std::vector<double>& weights);
+  // The map of the estimate: every track held by more than half of the weight.
+  std::vector<MapLandmark> MapEstimate() const;
 
   Block* MutableBlock(Particle* particle, int b);
   void PredictLandmarks(Particle* particle, double dt);
   void CreateLandmark(Particle* particle, const common::Pose2& pose, const Detection& det);
   void StartFullState(Block* block, int lane, const common::Pose2& pose, const Detection& det);
+  // Known candidates: samples a landmark's model by the likelihood of its displacement's length
+  // (variance var_len) over n steps, sets its speed and turn rate, and returns the candidate.
+  std::size_t PickCandidate(Block* block, int lane, double length, double var_len, int n);
+  // Constant turn rate, a landmark taken as static: both sightings (p1, p2) see one point, fused;
+  // no heading, speed or turn rate.
+  void StartStationary(Block* block, int lane, const Eigen::Vector2d& p1, const Eigen::Matrix2d& p1_cov,
+                       const Eigen::Vector2d& p2, const Eigen::Matrix2d& p2_cov);
   // Constant turn rate: whether this particle takes a landmark displaced by delta (covariance
   // delta_cov) over `steps` steps since its first sighting as static (filter.landmark_static_prior).
   bool SampleStationary(const Eigen::Vector2d& delta, const Eigen::Matrix2d& delta_cov, int steps);
