@@ -97,5 +97,37 @@ TEST(RobotScorerTest, ReachFollowsTheLidarsRangeAndFieldOfView) {
   EXPECT_FALSE(scorer.InReach(robot, Eigen::Vector2d(1.0, 3.0)));  // outside the field of view
 }
 
+TEST(RobotScorerTest, LandmarkErrorsSplitByWhatTheMapLandmarkStandsFor) {
+  const Pose2 robot_world{1.0, 2.0, kPi / 2};
+  RobotScorer scorer(kFrame, Pose2{}, Lidar(100.0));  // both landmarks within reach
+  common::GroundTruth truth = Truth();
+  truth.landmarks[1].moving = true;
+  MapPoint near_static = InOwnFrame(truth.landmarks[0].pose);
+  near_static.position_m.x() += 0.3;
+  MapPoint near_mover = InOwnFrame(truth.landmarks[1].pose);
+  near_mover.position_m.y() += 0.4;
+  const MapPoint ghost{Eigen::Vector2d(-30.0, -30.0), -1};  // no true landmark within 3 m
+  scorer.Add(truth, robot_world, Pose2{}, std::nullopt, {near_static, near_mover, ghost}, nullptr);
+  RobotSummary s = scorer.Summary();
+  EXPECT_NEAR(s.static_landmark_rmse_m, std::sqrt((0.09 + 9.0) / 2.0), 1e-9);  // the ghost counts as static
+  EXPECT_NEAR(s.moving_landmark_rmse_m, 0.4, 1e-9);
+  EXPECT_DOUBLE_EQ(s.moving_completeness, 1.0);
+  // The mover leaves the map: the static figures stay, moving completeness drops to 0.
+  scorer.Add(truth, robot_world, Pose2{}, std::nullopt, {near_static}, nullptr);
+  s = scorer.Summary();
+  EXPECT_DOUBLE_EQ(s.moving_completeness, 0.0);
+  EXPECT_DOUBLE_EQ(s.map_completeness, 0.5);
+  EXPECT_NEAR(s.moving_landmark_rmse_m, 0.4, 1e-9);
+}
+
+TEST(RobotScorerTest, WithoutMoversMovingFiguresAreNeutral) {
+  RobotScorer scorer(kFrame, Pose2{}, Lidar(5.0));
+  scorer.Add(Truth(), kFrame, Pose2{}, std::nullopt, {InOwnFrame(Truth().landmarks[0].pose)}, nullptr);
+  const RobotSummary s = scorer.Summary();
+  EXPECT_DOUBLE_EQ(s.moving_landmark_rmse_m, 0.0);
+  EXPECT_DOUBLE_EQ(s.moving_completeness, 1.0);
+  EXPECT_NEAR(s.static_landmark_rmse_m, 0.0, kTol);
+}
+
 }  // namespace
 }  // namespace mrslam::evaluator

@@ -15,13 +15,8 @@ namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
-// The true landmark (index into truth, or -1) that a map landmark stands for, and its error.
-struct LandmarkMatch {
-  int truth_index = -1;
-  double error_m = 0.0;
-};
+}  // namespace
 
-// The matching shared by LandmarkErrors and MatchedTruth (see the header for the rules).
 std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
                                           const common::Pose2& frame_in_world, double cutoff_m) {
   assert(cutoff_m > 0.0);
@@ -76,8 +71,6 @@ std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map, cons
   }
   return matches;
 }
-
-}  // namespace
 
 common::Pose2 TruthInOwnFrame(const common::Pose2& truth_in_world, const common::Pose2& frame_in_world) {
   return common::Compose(common::Inverse(frame_in_world), truth_in_world);

@@ -50,6 +50,16 @@ double PoseNees(const common::Pose2& estimate, const Eigen::Matrix3d& covariance
 std::vector<double> LandmarkErrors(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
                                    const common::Pose2& frame_in_world, double cutoff_m = 3.0);
 
+// The true landmark (index into truth, or -1 beyond the cut-off) that a map landmark stands for,
+// and its error (cutoff_m without a partner), as LandmarkErrors matches them.
+struct LandmarkMatch {
+  int truth_index = -1;
+  double error_m = 0.0;
+};
+// One match per map landmark, in map order (the rules of LandmarkErrors).
+std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
+                                          const common::Pose2& frame_in_world, double cutoff_m = 3.0);
+
 // Indices of the true landmarks (into truth) that some map landmark stands for (as matched by
 // LandmarkErrors within the cut-off), ascending, each once.
 std::vector<int> MatchedTruth(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,

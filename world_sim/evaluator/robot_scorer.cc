@@ -34,23 +34,35 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
     dead_reckoning_err_.push_back(PositionError(dead_reckoning_, s.truth_own));
   }
   std::vector<TruePoint> true_points;
+  std::vector<bool> moving;
   for (const auto& l : truth.landmarks) {
     true_points.push_back({l.pose.Translation(), std::stoi(l.id)});
-    if (InReach(robot_truth, l.pose.Translation())) seen_.insert(true_points.back().landmark_id);
+    moving.push_back(l.moving);
+    if (InReach(robot_truth, l.pose.Translation())) {
+      seen_.insert(true_points.back().landmark_id);
+      if (l.moving) seen_moving_.insert(true_points.back().landmark_id);
+    }
   }
-  s.landmark_errors_m = LandmarkErrors(landmarks, true_points, frame_);
-  landmark_err_.insert(landmark_err_.end(), s.landmark_errors_m.begin(), s.landmark_errors_m.end());
-  std::size_t matched_seen = 0;
   in_map_.clear();
-  for (const int j : MatchedTruth(landmarks, true_points, frame_)) {
-    const int landmark_id = true_points[static_cast<std::size_t>(j)].landmark_id;
-    matched_seen += seen_.count(landmark_id);
-    in_map_.insert(landmark_id);
+  for (const LandmarkMatch& match : MatchLandmarks(landmarks, true_points, frame_)) {
+    s.landmark_errors_m.push_back(match.error_m);
+    const bool mover = match.truth_index >= 0 && moving[static_cast<std::size_t>(match.truth_index)];
+    (mover ? moving_landmark_err_ : static_landmark_err_).push_back(match.error_m);
+    if (match.truth_index >= 0) in_map_.insert(true_points[static_cast<std::size_t>(match.truth_index)].landmark_id);
   }
-  completeness_ = seen_.empty() ? 1.0 : static_cast<double>(matched_seen) / static_cast<double>(seen_.size());
+  landmark_err_.insert(landmark_err_.end(), s.landmark_errors_m.begin(), s.landmark_errors_m.end());
+  completeness_ = Completeness(seen_, in_map_);
+  moving_completeness_ = Completeness(seen_moving_, in_map_);
   s.map_completeness = completeness_;
   mapped_ = landmarks.size();
   return s;
+}
+
+double RobotScorer::Completeness(const std::set<int>& seen, const std::set<int>& in_map) {
+  if (seen.empty()) return 1.0;
+  std::size_t kept = 0;
+  for (const int id : seen) kept += in_map.count(id);
+  return static_cast<double>(kept) / static_cast<double>(seen.size());
 }
 
 RobotSummary RobotScorer::Summary() const {
@@ -58,12 +70,15 @@ RobotSummary RobotScorer::Summary() const {
   r.position_rmse_m = Rmse(position_err_);
   r.heading_rmse_deg = Rmse(heading_err_deg_);
   r.landmark_rmse_m = Rmse(landmark_err_);
+  r.static_landmark_rmse_m = Rmse(static_landmark_err_);
+  r.moving_landmark_rmse_m = Rmse(moving_landmark_err_);
   r.dead_reckoning_rmse_m = Rmse(dead_reckoning_err_);
   double nees_sum = 0.0;
   for (const double v : nees_) nees_sum += v;
   r.mean_nees = nees_.empty() ? 0.0 : nees_sum / static_cast<double>(nees_.size());
   r.landmarks_mapped = mapped_;
   r.map_completeness = completeness_;
+  r.moving_completeness = moving_completeness_;
   r.steps_scored = position_err_.size();
   return r;
 }

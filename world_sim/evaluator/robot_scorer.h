@@ -28,11 +28,16 @@ struct StepScore {
 struct RobotSummary {
   double position_rmse_m = 0.0;
   double heading_rmse_deg = 0.0;
-  double landmark_rmse_m = 0.0;        // 0 when the map never held a landmark
+  double landmark_rmse_m = 0.0;  // 0 when the map never held a landmark
+  // The same split by what each map landmark stands for: a static or a moving true landmark (a
+  // map landmark with no true partner counts as static: it corrupts the static map).
+  double static_landmark_rmse_m = 0.0;
+  double moving_landmark_rmse_m = 0.0;
   double dead_reckoning_rmse_m = 0.0;  // over the steps with odometry
   double mean_nees = 0.0;              // over the steps with a finite NEES; 0 for none
   std::size_t landmarks_mapped = 0;    // at the last step
   double map_completeness = 1.0;       // at the last step
+  double moving_completeness = 1.0;    // the same over the moving landmarks only
   std::size_t steps_scored = 0;
 };
 
@@ -62,10 +67,15 @@ class RobotScorer {
   common::Pose2 frame_;
   common::Pose2 dead_reckoning_;
   common::LidarOptions lidar_;
+  // Completeness at this step: the share of `seen` that is in the map (1 for none seen).
+  static double Completeness(const std::set<int>& seen, const std::set<int>& in_map);
+
   std::vector<double> position_err_, heading_err_deg_, landmark_err_, dead_reckoning_err_, nees_;
-  std::set<int> seen_;    // true landmark ids ever within the robot's reach
-  std::set<int> in_map_;  // true landmark ids in the map at the last step
-  double completeness_ = 1.0;
+  std::vector<double> static_landmark_err_, moving_landmark_err_;
+  std::set<int> seen_;         // true landmark ids ever within the robot's reach
+  std::set<int> seen_moving_;  // the moving ones among them
+  std::set<int> in_map_;       // true landmark ids in the map at the last step
+  double completeness_ = 1.0, moving_completeness_ = 1.0;
   std::size_t mapped_ = 0;
 };
 

@@ -152,10 +152,13 @@ nlohmann::json RunEvaluator::ScoreRobot(const std::string& id, const std::map<st
   r["position_rmse_m"] = s.position_rmse_m;
   r["heading_rmse_deg"] = s.heading_rmse_deg;
   r["landmark_rmse_m"] = s.landmark_rmse_m;
+  r["static_landmark_rmse_m"] = s.static_landmark_rmse_m;
+  r["moving_landmark_rmse_m"] = s.moving_landmark_rmse_m;
   r["dead_reckoning_rmse_m"] = s.dead_reckoning_rmse_m;
   r["mean_nees"] = s.mean_nees;
   r["landmarks_mapped"] = s.landmarks_mapped;
   r["map_completeness"] = s.map_completeness;
+  r["moving_completeness"] = s.moving_completeness;
   // Of the landmarks within the reach of this robot or of any robot whose frame it knows (over
   // the whole run), the share in its map at the end.
   std::set<int> union_reach;
