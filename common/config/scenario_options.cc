@@ -186,6 +186,23 @@ ControlOptions ParseControl(const YAML::Node& node, const std::string& path) {
   return c;
 }
 
+std::vector<SlipOptions> ParseSlips(Section& robot) {
+  std::vector<SlipOptions> slips;
+  const YAML::Node list = RequireSequence(robot, "slips");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    Section s(list[i], robot.KeyPath("slips") + "." + std::to_string(i));
+    SlipOptions slip;
+    slip.step = s.Require<int>("step");
+    if (!s.Has("displacement")) {
+      throw ScenarioError("scenario key '" + s.KeyPath("displacement") + "' is missing (required)");
+    }
+    slip.displacement = s.GetPose("displacement", {});
+    s.RejectUnknownKeys();
+    slips.push_back(slip);
+  }
+  return slips;
+}
+
 }  // namespace
 
 int ScenarioOptions::RobotIndex(const std::string& id) const {
@@ -294,6 +311,7 @@ ScenarioOptions CreateScenarioOptions(const YAML::Node& root) {
     r.initial_pose = s.GetPose("pose", {});
     r.frame_in_world = s.GetPose("frame", r.initial_pose);
     r.control = ParseControl(s.Raw("control"), path + ".control");
+    r.slips = ParseSlips(s);
     s.RejectUnknownKeys();
     o.robots.push_back(r);
   }
@@ -520,6 +538,13 @@ bool ScenarioOptions::IsValid(std::string* error) const {
     if (ct.type == ControlType::kArc) {
       c.Check(ct.radius_m > 0.0, p + ".control.radius_m", ct.radius_m, "must be positive");
       c.Check(ct.sweep_rad >= 0.0, p + ".control.sweep_rad", ct.sweep_rad, "must not be negative");
+    }
+    c.Check(!replay.enabled || r.slips.empty(), p + ".slips", r.slips.size(), "a replayed robot cannot slip");
+    for (std::size_t k = 0; k < r.slips.size(); ++k) {
+      const std::string slip = p + ".slips." + std::to_string(k);
+      c.Check(r.slips[k].step >= 1, slip + ".step", r.slips[k].step, "must be at least 1");
+      c.Check(Finite(r.slips[k].displacement), slip + ".displacement", PoseText(r.slips[k].displacement),
+              "must be finite");
     }
   }
 

@@ -84,11 +84,20 @@ struct ControlOptions {
   bool turn_left = true;                 // arc
 };
 
+// A slip: at the end of step `step` the robot's true pose moves by `displacement` (in its body
+// frame: forward, left, heading) while its odometry does not show it (wheels that slide, a robot
+// pushed or carried).
+struct SlipOptions {
+  int step = 1;
+  Pose2 displacement;
+};
+
 struct RobotOptions {
   std::string id;
   Pose2 initial_pose;    // in the world frame
   Pose2 frame_in_world;  // pose of the robot's own frame G_i in W
   ControlOptions control;
+  std::vector<SlipOptions> slips;  // simulation only
 };
 
 // Replay of a recorded data set (UTIAS MRCLAM) instead of the simulation. The robots of the

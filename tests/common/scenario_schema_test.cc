@@ -13,7 +13,7 @@
 
 // docs/scenario-schema.md documents exactly the keys the parser reads: every table row whose
 // first cell is a backticked key path names one key, and the parser's keys (looked up over every
-// scenario in config/ and a scheduled robot) are the same set.
+// scenario in config/ and a scheduled robot that slips) are the same set.
 namespace mrslam::common {
 namespace {
 
@@ -37,9 +37,11 @@ std::vector<YAML::Node> ScenarioDocuments() {
   for (const auto& entry : fs::directory_iterator(SourcePath("config"))) {
     if (entry.path().extension() == ".yaml") documents.push_back(YAML::LoadFile(entry.path().string()));
   }
-  // No file in config/ drives a robot by a schedule: one more document does, for the segments' keys.
+  // No file in config/ drives a robot by a schedule or makes it slip: one more document does, for
+  // the segments' and the slips' keys.
   YAML::Node schedule = YAML::LoadFile(SourcePath("tests/common/minimal_scenario.yaml"));
   schedule["robots"][0]["control"] = YAML::Load("{type: schedule, segments: [{v_mps: 0.5, duration_s: 1.0}]}");
+  schedule["robots"][0]["slips"] = YAML::Load("[{step: 3, displacement: [1.0, 0.0, 0.5]}]");
   documents.push_back(schedule);
   return documents;
 }

@@ -145,6 +145,25 @@ TEST(WorldTest, ScheduleRunsSegmentsBackToBackThenStops) {
   EXPECT_NEAR(end.heading, 0.3, kExact);
 }
 
+TEST(WorldTest, ASlipMovesTheTruePoseButNotTheOdometry) {
+  auto o = QuietScenario();
+  auto& c = o.robots[0].control;
+  c.type = common::ControlType::kSchedule;
+  c.segments = {{1.0, 0.0, 0.3}};  // 3 steps forward, then standing still
+  o.robots[0].slips = {{5, {1.0, 0.5, common::kPi / 4}}};
+  World world(o);
+  for (int k = 1; k <= 8; ++k) {
+    const auto sensed = world.Step();
+    const common::Pose2 pose = world.Truth().robots[0].pose;
+    EXPECT_DOUBLE_EQ(sensed[0].odometry.segments[0].v_mps, k <= 3 ? 1.0 : 0.0) << "step " << k;
+    EXPECT_DOUBLE_EQ(sensed[0].odometry.segments[0].w_radps, 0.0) << "step " << k;
+    // From (0.3, 0, 0): 1 m forward, 0.5 m left and 45 degrees at the end of step 5.
+    EXPECT_NEAR(pose.x, k < 5 ? 0.1 * std::min(k, 3) : 1.3, kExact) << "step " << k;
+    EXPECT_NEAR(pose.y, k < 5 ? 0.0 : 0.5, kExact) << "step " << k;
+    EXPECT_NEAR(pose.heading, k < 5 ? 0.0 : common::kPi / 4, kExact) << "step " << k;
+  }
+}
+
 class ArcTest : public ::testing::TestWithParam<bool> {};
 
 TEST_P(ArcTest, SweepsTheConfiguredAngleOnTheConfiguredCircle) {

@@ -30,6 +30,9 @@ std::vector<common::SensorStep> World::Step() {
     poses_before.push_back(robot.pose);
     commands.push_back(command);
     robot.pose = StepRobot(robot.pose, command, dt_s, options_.noise.robot_process_var, robot.process_rng);
+    for (const common::SlipOptions& slip : robot.options.slips) {
+      if (static_cast<std::uint32_t>(slip.step) == step_) robot.pose = common::Compose(robot.pose, slip.displacement);
+    }
   }
   for (auto& landmark : landmarks_) landmark.Step(dt_s, options_.noise.landmark_process_var);
 
