@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/cpu_clock.h"
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
@@ -230,6 +231,7 @@ struct AgentNode::Impl {
     const std::uint32_t k = next_step;
     if (!clock.count(k) || !lidar.count(k) || !imu.count(k) || !odometry.count(k)) return false;
     if (!PeerMessagesComplete(clock[k])) return false;
+    const double cpu_start_s = common::ThreadCpuSeconds();
     // Peer messages of step k-1 first, in a fixed order (sender, then sequence).
     if (auto it = inbox.find(k - 1); it != inbox.end()) {
       SortBySender(&it->second);
@@ -258,12 +260,14 @@ struct AgentNode::Impl {
     const filters::FilterEstimate estimate = filter->Estimate();
     cooperation::PeerOutbox outbox = cooperation.AfterStep(step, estimate);
     outbox.moved = cooperation.MovedNotices(filter->TakeMovedLandmarks(), k, time_s);
+    const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s);
     const auto sent = Send(std::move(outbox));
     LogRendezvous(k, *last);
     msg::Estimate m = ToMsg(estimate, agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
     m.frames_known(cooperation.frames_known());
     m.rejected_samples(static_cast<std::uint32_t>(counters.rejected_samples));
+    m.step_cpu_ms(step_cpu_ms);
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));
     Acknowledge(k, time_s, sent);
     ++counters.steps_processed;

@@ -145,6 +145,8 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     EXPECT_LE(r["map_completeness"].get<double>(), 1.0) << id;
     ExpectFiniteAtLeast(r, "union_completeness", 0.0, id);
     EXPECT_LE(r["union_completeness"].get<double>(), 1.0) << id;
+    ExpectFiniteAtLeast(r, "step_cpu_ms_median", 1e-6, id);  // the agents measure their steps
+    EXPECT_GE(r["step_cpu_ms_p99"].get<double>(), r["step_cpu_ms_median"].get<double>()) << id;
     EXPECT_LT(r["position_rmse_m"].get<double>(), 20.0) << id;  // 12 steps of 0.65 m: a sanity bound
     EXPECT_LT(r["heading_rmse_deg"].get<double>(), 180.0) << id;
     ASSERT_TRUE(r.contains("frames_known") && r["frames_known"].is_array()) << id;

@@ -47,6 +47,7 @@ class RunEvaluatorTest : public ::testing::Test {
       r2.landmarks = {{Eigen::Vector2d(1.0, 0.0), 2}};  // in r2's own frame
       r1.frames_known = r1_frames_known;
       r1.rejected_samples = 2 * step;  // the agent's running count
+      r1.step_cpu_ms = 1.0 + 2.0 * step;  // 1 and 3 ms
       evaluator.AddEstimate("r1", r1);
       evaluator.AddEstimate("r2", r2);
       if (step > 0) {  // standing still
@@ -80,6 +81,13 @@ TEST_F(RunEvaluatorTest, RejectedSamplesAreTheAgentsCountAtTheEnd) {
   const nlohmann::json summary = Score({});
   EXPECT_EQ(summary["robots"]["r1"]["rejected_samples"].get<unsigned>(), 2U);
   EXPECT_EQ(summary["robots"]["r2"]["rejected_samples"].get<unsigned>(), 0U);
+}
+
+TEST_F(RunEvaluatorTest, StepCpuTimeIsSummarizedByMedianAndP99) {
+  const nlohmann::json summary = Score({});
+  EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["step_cpu_ms_median"].get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["step_cpu_ms_p99"].get<double>(), 1.0 + 2.0 * 0.99);
+  EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["step_cpu_ms_median"].get<double>(), 0.0);
 }
 
 }  // namespace

@@ -133,7 +133,9 @@ nlohmann::json RunEvaluator::ScoreRobot(const std::string& id, const std::map<st
   RobotScorer scorer(frame, r0 != nullptr ? TruthInOwnFrame(r0->pose, frame) : Pose2{}, scenario_.sensors.lidar);
   const auto odometry = odometry_.find(id);
   const RobotEstimate* last = nullptr;
+  std::vector<double> step_cpu_ms;
   for (const auto& [step, est] : estimates_.at(id)) {
+    step_cpu_ms.push_back(est.step_cpu_ms);
     const auto t_it = truth_.find(step);
     if (t_it == truth_.end()) continue;
     const auto* rt = FindEntity(t_it->second.robots, id);
@@ -174,6 +176,8 @@ nlohmann::json RunEvaluator::ScoreRobot(const std::string& id, const std::map<st
   r["union_completeness"] =
       union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
   r["steps_scored"] = s.steps_scored;
+  r["step_cpu_ms_median"] = step_cpu_ms.empty() ? 0.0 : Median(step_cpu_ms);
+  r["step_cpu_ms_p99"] = step_cpu_ms.empty() ? 0.0 : Percentile(step_cpu_ms, 99.0);
   r["frames_known"] = last != nullptr ? last->frames_known : std::vector<std::string>{};
   r["rejected_samples"] = last != nullptr ? last->rejected_samples : 0U;
   r["rendezvous"] = last != nullptr ? ScoreRendezvous(frame, *last) : nlohmann::json::array();

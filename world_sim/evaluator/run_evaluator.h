@@ -36,6 +36,7 @@ struct RobotEstimate {
   std::vector<RendezvousRecord> rendezvous;
   // Samples and peer messages the agent has rejected so far (malformed, stale, not for it).
   std::uint32_t rejected_samples = 0;
+  double step_cpu_ms = 0.0;  // the agent's CPU time for this step's estimation
 };
 
 // Scores a run: collects the truth and every robot's estimates and odometry by step, then
