@@ -8,10 +8,12 @@
 //   --transform-reference: per ordered pair of robots, the error of T(G_i <- G_j) at the end of
 //     their first encounter as the joint MAP reference holds it: transform_reference;
 //   --smoother: each robot's error under the MAP smoother of the whole run, jointly and alone:
-//     smoother_reference.
+//     smoother_reference;
+//   --slip-recovery: whether each robot's filter recovers from the scenario's slips:
+//     slip_recovery.
 //
 //   mrslam_batch --scenario FILE --seeds A..B [--set k=v]... [--particles N] [--threads T]
-//                [--reference | --transform-reference | --smoother] [--json FILE]
+//                [--reference | --transform-reference | --smoother | --slip-recovery] [--json FILE]
 #include <cstdint>
 #include <cstdio>
 #include <stdexcept>
@@ -23,6 +25,7 @@
 #include "common/config/scenario_options.h"
 #include "common/seed_range.h"
 #include "scripts/batch/filter_accuracy.h"
+#include "scripts/batch/slip_recovery.h"
 #include "scripts/batch/smoother_reference.h"
 #include "scripts/batch/transform_reference.h"
 
@@ -34,7 +37,7 @@ int Main(int argc, char** argv) {
   std::string scenario_path, seeds_text = "1..50", json_path;
   std::vector<std::string> overrides;
   int particles = 0, threads = 1;
-  bool reference = false, transform_reference = false, smoother = false;
+  bool reference = false, transform_reference = false, smoother = false, slip_recovery = false;
   app.add_option("--scenario", scenario_path, "Scenario YAML file")->required();
   app.add_option("--seeds", seeds_text, "Seed range A..B (inclusive)");
   app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
@@ -51,6 +54,9 @@ int Main(int argc, char** argv) {
   app.add_flag("--smoother", smoother,
                "Print instead each robot's error under the MAP smoother of the whole run: all robots' data "
                "jointly (only the first robot's start known) and each robot's data alone");
+  app.add_flag("--slip-recovery", slip_recovery,
+               "Print instead whether each slipping robot's filter recovers from its first slip (robots[].slips), "
+               "against the same seed without the slips");
   app.add_option("--json", json_path, "Write medians, 90th percentiles and per-seed values here");
   try {
     app.parse(argc, argv);
@@ -61,14 +67,17 @@ int Main(int argc, char** argv) {
   const common::SeedRange seeds = common::ParseSeedRange("--seeds", seeds_text);
   common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);
   if (particles > 0) options.filter.particles = particles;
-  if (static_cast<int>(reference) + static_cast<int>(transform_reference) + static_cast<int>(smoother) > 1) {
-    throw std::runtime_error("one of --reference, --transform-reference and --smoother at most");
+  if (static_cast<int>(reference) + static_cast<int>(transform_reference) + static_cast<int>(smoother) +
+          static_cast<int>(slip_recovery) >
+      1) {
+    throw std::runtime_error("one of --reference, --transform-reference, --smoother and --slip-recovery at most");
   }
   // The reference's oracle association: the same detections, with their identities.
   if (reference || transform_reference || smoother) options.sensors.lidar.report_identity = true;
   const auto first_seed = static_cast<std::uint64_t>(seeds.first);
   if (transform_reference) return PrintTransformReference(options, first_seed, seeds.size(), threads, json_path);
   if (smoother) return PrintSmoother(options, first_seed, seeds.size(), threads, json_path);
+  if (slip_recovery) return PrintSlipRecovery(options, first_seed, seeds.size(), threads, json_path);
   return PrintFilterAccuracy(options, first_seed, seeds.size(), threads, json_path, reference);
 }
 

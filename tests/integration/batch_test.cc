@@ -26,15 +26,25 @@ using testing::BinPath;
 using testing::ChildProcess;
 using testing::SourcePath;
 
-// mrslam_batch on swarm_8, seed 1, with the given steps and mode flag; its JSON (empty, and the
-// test failed, if it did not exit 0).
-nlohmann::json RunBatch(int steps, const std::string& mode) {
+// mrslam_batch on a scenario (swarm_8 unless said), seed 1, with the given steps and mode flag;
+// its JSON (empty, and the test failed, if it did not exit 0).
+nlohmann::json RunBatch(int steps, const std::string& mode, const std::string& scenario = "config/swarm_8.yaml",
+                        const std::vector<std::string>& more = {}) {
   const testing::TempDir temp_dir("mrslam-batch");
   const std::string json_path = temp_dir.path() + "/batch.json";
   const std::string log = temp_dir.path() + "/batch.log";
-  ChildProcess batch({BinPath("mrslam_batch"), "--scenario", SourcePath("config/swarm_8.yaml"), "--seeds", "1..1",
-                      "--set", "run.steps=" + std::to_string(steps), mode, "--json", json_path},
-                     log);
+  std::vector<std::string> argv = {BinPath("mrslam_batch"),
+                                   "--scenario",
+                                   SourcePath(scenario),
+                                   "--seeds",
+                                   "1..1",
+                                   "--set",
+                                   "run.steps=" + std::to_string(steps),
+                                   mode,
+                                   "--json",
+                                   json_path};
+  argv.insert(argv.end(), more.begin(), more.end());
+  ChildProcess batch(argv, log);
   const std::optional<int> exit_code = batch.WaitExit(seconds(300));
   EXPECT_EQ(exit_code, std::optional<int>(0)) << testing::ReadFile(log);
   return exit_code == std::optional<int>(0) ? nlohmann::json::parse(testing::ReadFile(json_path)) : nlohmann::json{};
@@ -77,6 +87,24 @@ TEST(BatchSmootherTest, PlacesEveryFrameOnALandmarkField) {
     EXPECT_LT(common::DegFromRad(std::abs(common::WrapAngle(frames[i][2] - truth.heading))), 5.0)
         << scenario.robots[i].id;
   }
+}
+
+// --slip-recovery judges the step 30 steps after the first landmark reading that follows the
+// slip; a slip of nothing is recovered from, a real one leaves a larger error than the same seed
+// without it.
+TEST(BatchSlipRecoveryTest, JudgesTheStepAfterTheNextReading) {
+  const nlohmann::json none =
+      RunBatch(150, "--slip-recovery", "config/slip.yaml", {"--set", "robots.0.slips.0.displacement=[0.0, 0.0, 0.0]"});
+  ASSERT_TRUE(none.contains("robots"));
+  const auto& r1 = none.at("robots").at("r1");
+  EXPECT_EQ(r1.at("slip_step").get<int>(), 83);
+  EXPECT_EQ(r1.at("judged_step").at(0).get<int>(), 84 + 30);  // the field is dense: a reading at 84
+  EXPECT_EQ(r1.at("recovered").get<int>(), 1);
+  EXPECT_DOUBLE_EQ(r1.at("error_m").at(0).get<double>(), r1.at("error_without_slip_m").at(0).get<double>());
+  const nlohmann::json slipped = RunBatch(150, "--slip-recovery", "config/slip.yaml");
+  const auto& s1 = slipped.at("robots").at("r1");
+  EXPECT_GT(s1.at("error_m").at(0).get<double>(), s1.at("error_without_slip_m").at(0).get<double>());
+  EXPECT_FALSE(slipped.at("robots").contains("r2"));  // r2 does not slip
 }
 
 }  // namespace

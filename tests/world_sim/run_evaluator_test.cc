@@ -46,7 +46,7 @@ class RunEvaluatorTest : public ::testing::Test {
       r1.landmarks = {{Eigen::Vector2d(1.0, 0.0), 1}};
       r2.landmarks = {{Eigen::Vector2d(1.0, 0.0), 2}};  // in r2's own frame
       r1.frames_known = r1_frames_known;
-      r1.rejected_samples = 2 * step;  // the agent's running count
+      r1.rejected_samples = 2 * step;     // the agent's running count
       r1.step_cpu_ms = 1.0 + 2.0 * step;  // 1 and 3 ms
       evaluator.AddEstimate("r1", r1);
       evaluator.AddEstimate("r2", r2);
