@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -94,6 +95,9 @@ class BatchSmoother {
   // of the Gauss-Newton information J^T J (the Laplace approximation of the posterior),
   // computed when asked.
   Eigen::Matrix3d FirstPoseCovariance(int r) const;
+  // Robot r's current-pose covariance at the current solution, the same way (for the first
+  // robot: relative to its known first pose).
+  Eigen::Matrix3d PoseCovariance(int r = 0) const;
   // Robot r's every pose, from its first (step 0) to the last step added.
   const std::vector<common::Pose2>& Path(int r) const { return robots_.at(r).path; }
   // The current position of every landmark seen so far, with its identity.
@@ -149,6 +153,9 @@ class BatchSmoother {
   // current solution.
   Eigen::Vector2d Target(const Reading& z) const;
   Eigen::Vector2d WhitenedResidual(const Reading& z) const;
+  // The 3x3 block at pose robot_col(layout) of (J^T J)^-1 at the current solution; infinite
+  // where the information is singular.
+  Eigen::Matrix3d PoseBlockCovariance(const std::function<int(const Layout&)>& robot_col) const;
   // Marks the readings within the outlier gate at the current solution; true if any changed.
   bool UpdateInliers();
 

@@ -142,6 +142,30 @@ TEST(BatchSmoother, FirstPoseCovarianceCoversTheError) {
   EXPECT_LT(nees, 34.3);
 }
 
+TEST(BatchSmoother, PoseCovarianceCoversTheCurrentPosesError) {
+  // One robot alone, its current pose after 40 steps against the truth in its own frame, whitened
+  // by the covariance the solver reports, over seeds.
+  double nees = 0.0;
+  constexpr int kSeeds = 20;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    common::ScenarioOptions o = PaperScenario();
+    o.seed = seed;
+    const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
+    BatchSmoother reference = batch::OracleSmoother(o, {0});
+    EXPECT_EQ(reference.PoseCovariance(0), Eigen::Matrix3d::Zero());  // the known first pose
+    for (int k = 0; k < 40; ++k) reference.Add({source->Step()[0]});
+    reference.Solve();
+    const common::GroundTruth truth = source->Truth();
+    const common::Pose2 t = common::Compose(common::Inverse(truth.frames[0].second), truth.robots[0].pose);
+    const common::Pose2& x = reference.Pose(0);
+    const Eigen::Vector3d e(x.x - t.x, x.y - t.y, common::WrapAngle(x.heading - t.heading));
+    nees += e.dot(reference.PoseCovariance(0).ldlt().solve(e));
+  }
+  // Chi-square with 60 dof: 99.8 % of it within [31.7, 99.7] (Wilson-Hilferty).
+  EXPECT_GT(nees, 31.7);
+  EXPECT_LT(nees, 99.7);
+}
+
 // r1's whole path as a smoother solved every 15 steps holds it, from the given steps.
 std::vector<common::Pose2> SmoothedPath(const common::ScenarioOptions& o,
                                         const std::vector<common::SensorStep>& steps) {
