@@ -417,6 +417,114 @@ void WriteTables(const std::string& path, const std::vector<Job>& jobs, const st
   out << "- ekf_ela static completeness at most 0.05 below ekf's: " << completeness_ok << "/" << total << " cells\n";
 }
 
+// The filters of --filters; throws for an unknown one, or the oracle with --multi-process.
+std::vector<std::string> ParseFilters(const std::string& text, bool multi_process) {
+  const std::vector<std::string> filters = Split(text);
+  for (const auto& f : filters) {
+    if (f != "ekf" && f != "ekf_ela" && f != "fastslam" && f != kOracle) {
+      throw std::runtime_error("unknown filter '" + f + "' (ekf, ekf_ela, fastslam or " + kOracle + ")");
+    }
+    if (f == kOracle && multi_process) {
+      throw std::runtime_error(std::string(kOracle) + " runs in-process only (the agents see no truth)");
+    }
+  }
+  return filters;
+}
+
+// Jobs cell by cell, so that progress counts finished cells.
+std::vector<Job> MakeJobs(const std::vector<std::string>& filters, int runs) {
+  std::vector<Job> jobs;
+  for (int d = 0; d < static_cast<int>(kDynamism.size()); ++d) {
+    for (int s = 0; s < static_cast<int>(kSpeeds.size()); ++s) {
+      for (int r = 1; r <= runs; ++r) {
+        for (const auto& f : filters) jobs.push_back({f, d, s, r});
+      }
+    }
+  }
+  return jobs;
+}
+
+// Every job's row, how many failed (and the first error), and the grid's wall time.
+struct GridResult {
+  std::vector<Row> rows;
+  int failed = 0;
+  std::string first_error;
+  double seconds = 0.0;
+};
+
+// Runs the jobs on `threads` workers (one with --multi-process: each run's processes use every
+// core), with progress by finished cells. A run that fails is counted and left out; the others go
+// on.
+GridResult RunJobs(const common::ScenarioOptions& options, const MultiProcessSetup* multi_process,
+                   const std::vector<Job>& jobs, int frames, int threads, int jobs_per_cell) {
+  const int num_jobs = static_cast<int>(jobs.size());
+  const int num_cells = static_cast<int>(kDynamism.size() * kSpeeds.size());
+  GridResult result;
+  result.rows.resize(jobs.size());
+  std::vector<std::string> errors(jobs.size());
+  std::vector<int> cell_left(num_cells, jobs_per_cell);
+  int cells_done = 0;
+  common::ProgressLine progress;
+  const auto start = std::chrono::steady_clock::now();
+  const auto run = [&](int j) {
+    try {
+      result.rows[j] = multi_process != nullptr ? RunJobMultiProcess(options, *multi_process, jobs[j], frames)
+                                                : RunJob(options, jobs[j], frames);
+    } catch (const std::exception& e) {
+      errors[j] = e.what();
+      result.rows[j].failed = true;
+    }
+  };
+  const auto done = [&](int j, int finished) {
+    if (result.rows[j].failed) {
+      progress.Finish();
+      std::fprintf(stderr, "mrslam_grid: run %d of %s at dynamism %g, speed %g m/s failed: %s\n", jobs[j].run,
+                   jobs[j].filter.c_str(), kDynamism[jobs[j].dynamism_index], kSpeeds[jobs[j].speed_index],
+                   errors[j].c_str());
+      if (result.failed++ == 0) result.first_error = errors[j];
+    }
+    const int cell = jobs[j].dynamism_index * static_cast<int>(kSpeeds.size()) + jobs[j].speed_index;
+    if (--cell_left[cell] == 0) ++cells_done;
+    const double elapsed = SecondsSince(start);
+    const double left = elapsed / finished * (num_jobs - finished);
+    progress.Show(fmt::format("cells {}/{}, runs {}/{}, elapsed {:.0f} s, left ~{:.0f} s", cells_done, num_cells,
+                              finished, num_jobs, elapsed, left),
+                  finished == num_jobs);
+  };
+  common::ParallelFor(num_jobs, multi_process != nullptr ? 1 : threads, run, done);
+  progress.Finish();
+  result.seconds = SecondsSince(start);
+  return result;
+}
+
+// grid.csv: one row per job that finished.
+void WriteCsv(const std::string& path, const common::ScenarioOptions& options, const std::vector<Job>& jobs,
+              const std::vector<Row>& rows) {
+  std::ofstream csv(path);
+  if (!csv) throw std::runtime_error("cannot write " + path);
+  csv << "filter,dynamism,speed_mps,run,landmark_rmse_m,robot_rmse_m,static_completeness,static_only_completeness";
+  for (const auto& r : options.robots) csv << "," << r.id << "_landmark_rmse_m";
+  for (const auto& r : options.robots) csv << "," << r.id << "_robot_rmse_m";
+  for (const auto& r : options.robots) csv << "," << r.id << "_static_completeness";
+  csv << ",moving_flag_share,mapped_at_end,seconds\n";
+  char buf[64];
+  auto num = [&](double v) {
+    std::snprintf(buf, sizeof(buf), "%.6g", v);
+    return std::string(buf);
+  };
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    const Row& r = rows[j];
+    if (r.failed) continue;
+    csv << jobs[j].filter << "," << num(kDynamism[jobs[j].dynamism_index]) << "," << num(kSpeeds[jobs[j].speed_index])
+        << "," << jobs[j].run << "," << num(r.landmark_rmse_m) << "," << num(r.robot_rmse_m) << ","
+        << num(r.static_completeness) << "," << num(r.static_only_completeness);
+    for (const double v : r.robot_landmark_rmse_m) csv << "," << num(v);
+    for (const double v : r.robot_rmse_per_robot_m) csv << "," << num(v);
+    for (const double v : r.robot_completeness) csv << "," << num(v);
+    csv << "," << num(r.moving_flag_share) << "," << num(r.mapped_at_end) << "," << num(r.seconds) << "\n";
+  }
+}
+
 int Main(int argc, char** argv) {
   CLI::App app{"Paper B's experiment grid, in-process (World + one filter per robot, no DDS) or multi-process."};
   std::string scenario_path, out_dir, filters_text = "ekf,ekf_ela,fastslam";
@@ -444,104 +552,25 @@ int Main(int argc, char** argv) {
   if (!options.landmark_field.enabled) throw std::runtime_error(scenario_path + " has no landmark_field");
   options.filter.particles = particles;
   options.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kConstantTurnRate;
-  const std::vector<std::string> filters = Split(filters_text);
-  for (const auto& f : filters) {
-    if (f != "ekf" && f != "ekf_ela" && f != "fastslam" && f != kOracle) {
-      throw std::runtime_error("unknown filter '" + f + "' (ekf, ekf_ela, fastslam or " + kOracle + ")");
-    }
-    if (f == kOracle && multi_process) {
-      throw std::runtime_error(std::string(kOracle) + " runs in-process only (the agents see no truth)");
-    }
-  }
+  const std::vector<std::string> filters = ParseFilters(filters_text, multi_process);
   std::filesystem::create_directories(out_dir);
   MultiProcessSetup setup{scenario_path, overrides, out_dir + "/logs"};
   setup.overrides.push_back("filter.particles=" + std::to_string(particles));
   setup.overrides.push_back("filter.landmark_kinematics=constant_turn_rate");
-  if (multi_process) {
-    std::filesystem::create_directories(setup.log_dir);
-    threads = 1;  // each run's processes use every core
-  }
+  if (multi_process) std::filesystem::create_directories(setup.log_dir);
 
-  // Jobs cell by cell, so that progress counts finished cells.
-  std::vector<Job> jobs;
-  for (int d = 0; d < static_cast<int>(kDynamism.size()); ++d) {
-    for (int s = 0; s < static_cast<int>(kSpeeds.size()); ++s) {
-      for (int r = 1; r <= runs; ++r) {
-        for (const auto& f : filters) jobs.push_back({f, d, s, r});
-      }
-    }
-  }
+  const std::vector<Job> jobs = MakeJobs(filters, runs);
   const int num_jobs = static_cast<int>(jobs.size());
-  const int jobs_per_cell = runs * static_cast<int>(filters.size());
-  const int num_cells = static_cast<int>(kDynamism.size() * kSpeeds.size());
-  std::vector<Row> rows(jobs.size());
-  std::vector<std::string> errors(jobs.size());
-  std::vector<int> cell_left(num_cells, jobs_per_cell);
-  int cells_done = 0;
-  int failed = 0;
-  std::string first_error;
-  common::ProgressLine progress;
-  const auto start = std::chrono::steady_clock::now();
-  // A run that fails is counted and left out; the others go on.
-  const auto run = [&](int j) {
-    try {
-      rows[j] = multi_process ? RunJobMultiProcess(options, setup, jobs[j], frames) : RunJob(options, jobs[j], frames);
-    } catch (const std::exception& e) {
-      errors[j] = e.what();
-      rows[j].failed = true;
-    }
-  };
-  const auto done = [&](int j, int finished) {
-    if (rows[j].failed) {
-      progress.Finish();
-      std::fprintf(stderr, "mrslam_grid: run %d of %s at dynamism %g, speed %g m/s failed: %s\n", jobs[j].run,
-                   jobs[j].filter.c_str(), kDynamism[jobs[j].dynamism_index], kSpeeds[jobs[j].speed_index],
-                   errors[j].c_str());
-      if (failed++ == 0) first_error = errors[j];
-    }
-    const int cell = jobs[j].dynamism_index * static_cast<int>(kSpeeds.size()) + jobs[j].speed_index;
-    if (--cell_left[cell] == 0) ++cells_done;
-    const double elapsed = SecondsSince(start);
-    const double left = elapsed / finished * (num_jobs - finished);
-    progress.Show(fmt::format("cells {}/{}, runs {}/{}, elapsed {:.0f} s, left ~{:.0f} s", cells_done, num_cells,
-                              finished, num_jobs, elapsed, left),
-                  finished == num_jobs);
-  };
-  common::ParallelFor(num_jobs, threads, run, done);
-  progress.Finish();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  const std::string csv_path = out_dir + "/grid.csv";
-  std::ofstream csv(csv_path);
-  if (!csv) throw std::runtime_error("cannot write " + csv_path);
-  csv << "filter,dynamism,speed_mps,run,landmark_rmse_m,robot_rmse_m,static_completeness,static_only_completeness";
-  for (const auto& r : options.robots) csv << "," << r.id << "_landmark_rmse_m";
-  for (const auto& r : options.robots) csv << "," << r.id << "_robot_rmse_m";
-  for (const auto& r : options.robots) csv << "," << r.id << "_static_completeness";
-  csv << ",moving_flag_share,mapped_at_end,seconds\n";
-  char buf[64];
-  auto num = [&](double v) {
-    std::snprintf(buf, sizeof(buf), "%.6g", v);
-    return std::string(buf);
-  };
-  for (std::size_t j = 0; j < jobs.size(); ++j) {
-    const Row& r = rows[j];
-    if (r.failed) continue;
-    csv << jobs[j].filter << "," << num(kDynamism[jobs[j].dynamism_index]) << "," << num(kSpeeds[jobs[j].speed_index])
-        << "," << jobs[j].run << "," << num(r.landmark_rmse_m) << "," << num(r.robot_rmse_m) << ","
-        << num(r.static_completeness) << "," << num(r.static_only_completeness);
-    for (const double v : r.robot_landmark_rmse_m) csv << "," << num(v);
-    for (const double v : r.robot_rmse_per_robot_m) csv << "," << num(v);
-    for (const double v : r.robot_completeness) csv << "," << num(v);
-    csv << "," << num(r.moving_flag_share) << "," << num(r.mapped_at_end) << "," << num(r.seconds) << "\n";
-  }
-  WriteTables(out_dir + "/tables.md", jobs, rows, filters, runs, frames, particles, seconds, multi_process);
-  std::printf("grid: %d runs in %.0f s; wrote %s/grid.csv and %s/tables.md\n", num_jobs, seconds, out_dir.c_str(),
+  const GridResult grid = RunJobs(options, multi_process ? &setup : nullptr, jobs, frames, threads,
+                                  runs * static_cast<int>(filters.size()));
+  WriteCsv(out_dir + "/grid.csv", options, jobs, grid.rows);
+  WriteTables(out_dir + "/tables.md", jobs, grid.rows, filters, runs, frames, particles, grid.seconds, multi_process);
+  std::printf("grid: %d runs in %.0f s; wrote %s/grid.csv and %s/tables.md\n", num_jobs, grid.seconds, out_dir.c_str(),
               out_dir.c_str());
   std::fflush(stdout);
-  if (failed > 0) {
+  if (grid.failed > 0) {
     std::fprintf(stderr, "mrslam_grid: error: %d of %d runs failed, left out of grid.csv and tables.md (first: %s)\n",
-                 failed, num_jobs, first_error.c_str());
+                 grid.failed, num_jobs, grid.first_error.c_str());
     return kSomeRunsFailed;
   }
   return 0;

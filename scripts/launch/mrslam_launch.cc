@@ -294,6 +294,50 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   return FinishSummary(dir, Seconds(Clock::now() - start), domain, summary_out);
 }
 
+// What a finished seed prints: one line in a multi-seed run, else the summary table, the outputs
+// and the plots.
+void PrintRun(const common::ScenarioOptions& scenario, long long seed, const json& summary, const std::string& dir,
+              const std::vector<std::string>& plots, bool multi) {
+  const double wall_s = summary.value("wall_seconds", 0.0);
+  if (multi) {
+    std::cout << "seed " << seed << ": finished in " << FormatSeconds(wall_s) << " (" << dir << ")\n" << std::flush;
+    return;
+  }
+  std::cout << "\nScenario '" << scenario.name << "', seed " << seed << ", " << summary.value("steps", json()).dump()
+            << " steps, finished in " << FormatSeconds(wall_s) << "\n\n"
+            << SummaryTable(summary) << "\n"
+            << "Outputs: " << dir << "/summary.json, " << dir << "/metrics.csv, " << dir << "/trajectories/, " << dir
+            << "/logs/\n";
+  if (!plots.empty()) {
+    std::cout << "Plots:\n";
+    for (const auto& p : plots) std::cout << "  " << p << "\n";
+  }
+  std::cout << std::flush;
+}
+
+// Writes and prints the aggregate over the seeds that finished; kFailed if any seed failed.
+int WriteAggregate(const common::ScenarioOptions& scenario, const std::vector<long long>& seeds,
+                   const std::vector<json>& summaries, const std::vector<long long>& finished,
+                   const std::vector<long long>& failed, const std::string& out_dir) {
+  json aggregate = Aggregate(summaries, finished);
+  aggregate["failed_seeds"] = failed;
+  const std::string path = out_dir + "/aggregate.json";
+  std::ofstream out(path);
+  out << aggregate.dump(2) << "\n";
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + path);
+  std::cout << "\nScenario '" << scenario.name << "', seeds " << seeds.front() << ".." << seeds.back() << " ("
+            << finished.size() << " runs): median and 90th percentile over seeds\n\n"
+            << AggregateTable(aggregate) << "\nAggregate: " << path << "\n"
+            << std::flush;
+  if (failed.empty()) return kOk;
+  std::string list;
+  for (const long long seed : failed) list += (list.empty() ? "" : ", ") + std::to_string(seed);
+  std::cerr << kName << ": error: " << failed.size() << " of " << seeds.size() << " seeds failed (" << list
+            << "; logs in " << out_dir << "/seed-<S>/logs)\n";
+  return kFailed;
+}
+
 int Main(const LaunchFlags& flags) {
   const auto scenario = common::LoadScenarioFromFlags(flags.common);  // validates; throws one line
   const std::string scenario_path = fs::absolute(flags.common.scenario).string();
@@ -345,45 +389,12 @@ int Main(const LaunchFlags& flags) {
     std::vector<std::string> plots;
     if (!flags.no_plots) plots = RunPlots(dir, stop);
     if (stop) return kStopped;
-    const double wall_s = summary.value("wall_seconds", 0.0);
-    if (multi) {
-      std::cout << "seed " << seed << ": finished in " << FormatSeconds(wall_s) << " (" << dir << ")\n" << std::flush;
-    } else {
-      std::cout << "\nScenario '" << scenario.name << "', seed " << seed << ", "
-                << summary.value("steps", json()).dump() << " steps, finished in " << FormatSeconds(wall_s) << "\n\n"
-                << SummaryTable(summary) << "\n"
-                << "Outputs: " << dir << "/summary.json, " << dir << "/metrics.csv, " << dir << "/trajectories/, "
-                << dir << "/logs/\n";
-      if (!plots.empty()) {
-        std::cout << "Plots:\n";
-        for (const auto& p : plots) std::cout << "  " << p << "\n";
-      }
-      std::cout << std::flush;
-    }
+    PrintRun(scenario, seed, summary, dir, plots, multi);
     summaries.push_back(std::move(summary));
     finished.push_back(seed);
   }
 
-  if (multi) {
-    json aggregate = Aggregate(summaries, finished);
-    aggregate["failed_seeds"] = failed;
-    const std::string path = out_dir + "/aggregate.json";
-    std::ofstream out(path);
-    out << aggregate.dump(2) << "\n";
-    out.close();
-    if (!out) throw std::runtime_error("cannot write " + path);
-    std::cout << "\nScenario '" << scenario.name << "', seeds " << seeds.front() << ".." << seeds.back() << " ("
-              << finished.size() << " runs): median and 90th percentile over seeds\n\n"
-              << AggregateTable(aggregate) << "\nAggregate: " << path << "\n"
-              << std::flush;
-    if (!failed.empty()) {
-      std::string list;
-      for (const long long seed : failed) list += (list.empty() ? "" : ", ") + std::to_string(seed);
-      std::cerr << kName << ": error: " << failed.size() << " of " << seeds.size() << " seeds failed (" << list
-                << "; logs in " << out_dir << "/seed-<S>/logs)\n";
-      return kFailed;
-    }
-  }
+  if (multi) return WriteAggregate(scenario, seeds, summaries, finished, failed, out_dir);
   return kOk;
 }
 
