@@ -324,23 +324,23 @@ void BatchSmoother::SolveOnce() {
 
 Eigen::Matrix3d BatchSmoother::FirstPoseCovariance(int r) const {
   if (r < 1 || r >= static_cast<int>(robots_.size())) throw std::out_of_range("no robot placed by the data there");
-  return PoseBlockCovariance([r](const Layout& layout) { return layout.RobotCol(r, 0); });
+  return PoseBlockCovariance(r, 0);
 }
 
 Eigen::Matrix3d BatchSmoother::PoseCovariance(int r) const {
   if (r < 0 || r >= static_cast<int>(robots_.size())) throw std::out_of_range("no such robot");
   if (r == 0 && robots_[0].path.size() == 1) return Eigen::Matrix3d::Zero();  // the known first pose
-  return PoseBlockCovariance([r](const Layout& layout) { return layout.RobotCol(r, layout.steps); });
+  return PoseBlockCovariance(r, -1);
 }
 
-Eigen::Matrix3d BatchSmoother::PoseBlockCovariance(const std::function<int(const Layout&)>& robot_col) const {
+Eigen::Matrix3d BatchSmoother::PoseBlockCovariance(int r, int t) const {
   const Layout layout = MakeLayout();
   Rows rows;
   const Eigen::SparseMatrix<double> j = Jacobian(layout, &rows);
   const Eigen::SparseMatrix<double> h = j.transpose() * j;
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(h);
   Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, 3);
-  const int col = robot_col(layout);
+  const int col = layout.RobotCol(r, t < 0 ? layout.steps : t);
   e.block<3, 3>(col, 0).setIdentity();
   const Eigen::MatrixXd x = information.solve(e);
   const bool ok = information.info() == Eigen::Success && x.allFinite();

@@ -1,6 +1,5 @@
 #pragma once
 
-#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -153,9 +152,9 @@ class BatchSmoother {
   // current solution.
   Eigen::Vector2d Target(const Reading& z) const;
   Eigen::Vector2d WhitenedResidual(const Reading& z) const;
-  // The 3x3 block at pose robot_col(layout) of (J^T J)^-1 at the current solution; infinite
-  // where the information is singular.
-  Eigen::Matrix3d PoseBlockCovariance(const std::function<int(const Layout&)>& robot_col) const;
+  // The 3x3 block of (J^T J)^-1 at the current solution at robot r's pose of step t (t < 0: its
+  // current pose); infinite where the information is singular.
+  Eigen::Matrix3d PoseBlockCovariance(int r, int t) const;
   // Marks the readings within the outlier gate at the current solution; true if any changed.
   bool UpdateInliers();
 

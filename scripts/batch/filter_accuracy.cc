@@ -67,10 +67,19 @@ class Estimator {
   std::unique_ptr<robot_agent::smoother::BatchSmoother> reference_;
 };
 
-// Runs one seed: the scenario's step source (the simulated World, or the replay of a recorded data
-// set) + one estimator per robot, each scored as the evaluator scores it (RobotScorer); returns the
-// metrics per robot (scenario order).
-std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t seed, bool reference) {
+// One seed's metrics per robot (scenario order).
+std::vector<RobotRun> RunSeed(const common::ScenarioOptions& options, std::uint64_t seed, bool reference) {
+  std::vector<RobotRun> out;
+  for (const evaluator::RobotSummary& s : ScoreSeed(options, seed, reference)) {
+    out.push_back({s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m});
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, std::uint64_t seed, bool reference,
+                                               const StepObserver& observer) {
   options.seed = seed;
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
   const common::GroundTruth truth0 = source->Truth();
@@ -88,18 +97,15 @@ std::vector<RobotRun> RunSeed(common::ScenarioOptions options, std::uint64_t see
     for (std::size_t i = 0; i < n; ++i) {
       estimators[i].Process(steps[i]);
       const Estimator::Output e = estimators[i].Estimate();
-      scorers[i].Add(truth, truth.robots[i].pose, e.pose, e.covariance, e.map, &steps[i].odometry);
+      const evaluator::StepScore score =
+          scorers[i].Add(truth, truth.robots[i].pose, e.pose, e.covariance, e.map, &steps[i].odometry);
+      if (observer) observer(i, steps[i], score);
     }
   }
-  std::vector<RobotRun> out(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const evaluator::RobotSummary s = scorers[i].Summary();
-    out[i] = {s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m};
-  }
+  std::vector<evaluator::RobotSummary> out;
+  for (const auto& scorer : scorers) out.push_back(scorer.Summary());
   return out;
 }
-
-}  // namespace
 
 int PrintFilterAccuracy(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds, int threads,
                         const std::string& json_path, bool reference) {

@@ -1,9 +1,14 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "common/config/scenario_options.h"
+#include "common/sensor_types.h"
+#include "world_sim/evaluator/robot_scorer.h"
 
 namespace mrslam::batch {
 
@@ -13,6 +18,17 @@ namespace mrslam::batch {
 // (the oracle BatchSmoother: batch MAP with oracle association and kinematics) replaces each
 // robot's own filter on the same data. Prints the median and 90th percentile over the seeds per
 // robot and metric; the JSON (json_path, if any) also holds every seed's values.
+// Sees robot `robot`'s every step: what it sensed and how its estimate scored.
+using StepObserver =
+    std::function<void(std::size_t robot, const common::SensorStep& step, const evaluator::StepScore& score)>;
+
+// Runs one seed in-process: the scenario's step source (the simulated World, or the replay of a
+// recorded data set) and one estimator per robot (its own filter, or with reference the oracle
+// BatchSmoother), each scored as the evaluator scores it (evaluator::RobotScorer); observer, if
+// any, sees every step's score. Returns each robot's summary, in scenario order.
+std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, std::uint64_t seed, bool reference,
+                                               const StepObserver& observer = {});
+
 int PrintFilterAccuracy(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds, int threads,
                         const std::string& json_path, bool reference);
 

@@ -3,21 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <memory>
-#include <optional>
 #include <stdexcept>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "common/angles.h"
-#include "common/config/agent_options_projection.h"
-#include "robot_agent/filters/filter_factory.h"
-#include "robot_agent/filters/slam_filter.h"
 #include "scripts/batch/batch_report.h"
+#include "scripts/batch/filter_accuracy.h"
 #include "world_sim/evaluator/metrics.h"
-#include "world_sim/evaluator/robot_scorer.h"
-#include "world_sim/source/step_source_factory.h"
 
 namespace mrslam::batch {
 namespace {
@@ -35,32 +29,14 @@ struct Trace {
 };
 
 // Runs one seed with each robot's own filter and records every robot's errors.
-std::vector<Trace> RunTraces(common::ScenarioOptions options, std::uint64_t seed) {
-  options.seed = seed;
-  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
-  const common::GroundTruth truth0 = source->Truth();
-  const std::size_t n = options.robots.size();
-  std::vector<std::unique_ptr<robot_agent::filters::SlamFilter>> filters;
-  std::vector<evaluator::RobotScorer> scorers;
-  for (std::size_t i = 0; i < n; ++i) {
-    filters.push_back(robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, options.robots[i].id), seed));
-    if (!filters.back()) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
-    const common::Pose2& frame = truth0.frames[i].second;
-    scorers.emplace_back(frame, evaluator::TruthInOwnFrame(truth0.robots[i].pose, frame), options.sensors.lidar);
-  }
-  std::vector<Trace> traces(n);
-  for (int k = 0; k < options.run.steps; ++k) {
-    const std::vector<common::SensorStep> steps = source->Step();
-    const common::GroundTruth truth = source->Truth();
-    for (std::size_t i = 0; i < n; ++i) {
-      filters[i]->Process(steps[i]);
-      const robot_agent::filters::FilterEstimate e = filters[i]->Estimate();
-      const evaluator::StepScore s = scorers[i].Add(truth, truth.robots[i].pose, e.pose, std::nullopt, {}, nullptr);
-      traces[i].position_err_m.push_back(s.position_err_m);
-      traces[i].heading_err_deg.push_back(common::DegFromRad(s.heading_err_rad));
-      traces[i].saw_landmark.push_back(!steps[i].lidar.landmarks.empty());
-    }
-  }
+std::vector<Trace> RunTraces(const common::ScenarioOptions& options, std::uint64_t seed) {
+  std::vector<Trace> traces(options.robots.size());
+  ScoreSeed(options, seed, /*reference=*/false,
+            [&](std::size_t i, const common::SensorStep& step, const evaluator::StepScore& s) {
+              traces[i].position_err_m.push_back(s.position_err_m);
+              traces[i].heading_err_deg.push_back(common::DegFromRad(s.heading_err_rad));
+              traces[i].saw_landmark.push_back(!step.lidar.landmarks.empty());
+            });
   return traces;
 }
 

@@ -4,8 +4,6 @@ namespace mrslam::launch {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 }  // namespace
 
 std::vector<std::string> ChildCommand(const RunArgs& run, const std::string& executable,
@@ -45,7 +43,7 @@ RunEnd SuperviseRun(ProcessSupervisor* children, const RunLimits& limits, const 
     if (failure) return {RunEnd::Kind::kFailed, failure};
     if (children->running() == 0) return {};
     const auto now = Clock::now();
-    if (limits.timeout_s > 0 && Seconds(now - limits.start) > limits.timeout_s)
+    if (limits.timeout_s > 0 && now - limits.start > std::chrono::duration<double>(limits.timeout_s))
       return {RunEnd::Kind::kTimedOut, std::nullopt};
     if (world_done_at && now - *world_done_at > limits.drain_timeout) {
       return {RunEnd::Kind::kDrainTimedOut, std::nullopt};
