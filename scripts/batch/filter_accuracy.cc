@@ -103,6 +103,7 @@ std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, 
     }
   }
   std::vector<evaluator::RobotSummary> out;
+  out.reserve(n);
   for (const auto& scorer : scorers) out.push_back(scorer.Summary());
   return out;
 }
