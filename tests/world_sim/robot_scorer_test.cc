@@ -90,11 +90,10 @@ TEST(RobotScorerTest, DeadReckoningAdvancesOnlyOnStepsWithOdometry) {
 TEST(RobotScorerTest, ReachFollowsTheLidarsRangeAndFieldOfView) {
   common::LidarOptions lidar = Lidar(5.0);
   lidar.fov_rad = kPi / 2;  // +-45 degrees
-  const RobotScorer scorer(kFrame, Pose2{}, lidar);
   const Pose2 robot{0.0, 0.0, 0.0};
-  EXPECT_TRUE(scorer.InReach(robot, Eigen::Vector2d(4.0, 1.0)));
-  EXPECT_FALSE(scorer.InReach(robot, Eigen::Vector2d(6.0, 0.0)));  // beyond range
-  EXPECT_FALSE(scorer.InReach(robot, Eigen::Vector2d(1.0, 3.0)));  // outside the field of view
+  EXPECT_TRUE(InLidarReach(lidar, robot, Eigen::Vector2d(4.0, 1.0)));
+  EXPECT_FALSE(InLidarReach(lidar, robot, Eigen::Vector2d(6.0, 0.0)));  // beyond range
+  EXPECT_FALSE(InLidarReach(lidar, robot, Eigen::Vector2d(1.0, 3.0)));  // outside the field of view
 }
 
 TEST(RobotScorerTest, LandmarkErrorsSplitByWhatTheMapLandmarkStandsFor) {

@@ -11,9 +11,9 @@ RobotScorer::RobotScorer(const common::Pose2& frame_in_world, const common::Pose
                          const common::LidarOptions& lidar)
     : frame_(frame_in_world), dead_reckoning_(dead_reckoning_start), lidar_(lidar) {}
 
-bool RobotScorer::InReach(const common::Pose2& pose, const Eigen::Vector2d& point) const {
+bool InLidarReach(const common::LidarOptions& lidar, const common::Pose2& pose, const Eigen::Vector2d& point) {
   const auto z = common::MeasureRangeBearing(pose, point);
-  return z.range_m <= lidar_.max_range_m && std::abs(z.bearing_rad) <= lidar_.fov_rad / 2.0;
+  return z.range_m <= lidar.max_range_m && std::abs(z.bearing_rad) <= lidar.fov_rad / 2.0;
 }
 
 StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2& robot_truth,
@@ -38,7 +38,7 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
   for (const auto& l : truth.landmarks) {
     true_points.push_back({l.pose.Translation(), std::stoi(l.id)});
     moving.push_back(l.moving);
-    if (InReach(robot_truth, l.pose.Translation())) {
+    if (InLidarReach(lidar_, robot_truth, l.pose.Translation())) {
       seen_.insert(true_points.back().landmark_id);
       if (l.moving) seen_moving_.insert(true_points.back().landmark_id);
     }

@@ -41,6 +41,10 @@ struct RobotSummary {
   std::size_t steps_scored = 0;
 };
 
+// Whether a landmark at point is within the lidar's reach (range and field of view) of a robot at
+// pose (true poses).
+bool InLidarReach(const common::LidarOptions& lidar, const common::Pose2& pose, const Eigen::Vector2d& point);
+
 // Scores one robot step by step against the truth: the single definition of the accuracy
 // metrics (docs/metrics.md) that the evaluator and the batch tools share. Pure.
 class RobotScorer {
@@ -60,8 +64,6 @@ class RobotScorer {
   RobotSummary Summary() const;
   // The true landmark ids that stand in the map at the last step.
   const std::set<int>& InMap() const { return in_map_; }
-  // Whether a landmark at point is within the lidar's reach of a robot at pose (true poses).
-  bool InReach(const common::Pose2& pose, const Eigen::Vector2d& point) const;
 
  private:
   common::Pose2 frame_;

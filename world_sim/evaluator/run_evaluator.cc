@@ -112,12 +112,12 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
 }
 
 std::map<std::string, std::set<int>> RunEvaluator::ReachedLandmarks() const {
-  const RobotScorer reach({}, {}, scenario_.sensors.lidar);
   std::map<std::string, std::set<int>> reached;
   for (const auto& [step, truth] : truth_) {
     for (const auto& rt : truth.robots) {
       for (const auto& l : truth.landmarks) {
-        if (reach.InReach(rt.pose, l.pose.Translation())) reached[rt.id].insert(std::stoi(l.id));
+        if (InLidarReach(scenario_.sensors.lidar, rt.pose, l.pose.Translation()))
+          reached[rt.id].insert(std::stoi(l.id));
       }
     }
   }
