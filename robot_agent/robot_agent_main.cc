@@ -10,7 +10,7 @@
 #include "common/config/scenario_flags.h"
 #include "common/dds/participant.h"
 #include "common/logging.h"
-#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/node/agent_node.h"
 
 namespace mrslam::robot_agent {
@@ -44,7 +44,7 @@ int Run(AgentFlags flags) {
   }
   // The agent's code gets its own options only: never the scenario, which holds the truth.
   const AgentOptions agent = common::AgentOptionsFor(scenario, flags.robot_id);
-  auto slam = filters::CreateFilter(agent, scenario.seed);
+  auto slam = factory::CreateFilter(agent, scenario.seed);
   if (!slam) throw std::runtime_error("filter '" + agent.filter.type + "' is not available");
   AgentNodeOptions options;
   options.domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.common.domain);

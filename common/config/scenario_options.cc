@@ -355,6 +355,22 @@ void ParseNoise(Section& top, ScenarioOptions* o) {
 }
 
 // The filter.
+// The online smoother's settings (filter.smoother).
+void ParseSmoother(Section& filter, robot_agent::SmootherOptions* d) {
+  Section s(filter.Raw("smoother"), "filter.smoother");
+  d->window_keyframes = s.Get("window_keyframes", d->window_keyframes);
+  d->max_keyframe_gap_steps = s.Get("max_keyframe_gap_steps", d->max_keyframe_gap_steps);
+  d->front_end_particles = s.Get("front_end_particles", d->front_end_particles);
+  d->huber_k = s.Get("huber_k", d->huber_k);
+  d->reading_gate_probability = s.Get("reading_gate_probability", d->reading_gate_probability);
+  d->speed_factor_sd = s.Get("speed_factor_sd", d->speed_factor_sd);
+  d->turn_factor_sd = s.Get("turn_factor_sd", d->turn_factor_sd);
+  d->turn_bias_sd_radps = s.Get("turn_bias_sd_radps", d->turn_bias_sd_radps);
+  d->lost_after_keyframes = s.Get("lost_after_keyframes", d->lost_after_keyframes);
+  d->min_recovery_readings = s.Get("min_recovery_readings", d->min_recovery_readings);
+  s.RejectUnknownKeys();
+}
+
 void ParseFilter(Section& top, ScenarioOptions* o) {
   Section f(top.Raw("filter"), "filter");
   auto& d = o->filter;
@@ -402,6 +418,7 @@ void ParseFilter(Section& top, ScenarioOptions* o) {
   d.odometry_turn_scale = f.Get("odometry_turn_scale", d.odometry_turn_scale);
   d.odometry_lag_s = f.Get("odometry_lag_s", d.odometry_lag_s);
   d.outlier_gate_probability = f.Get("outlier_gate_probability", d.outlier_gate_probability);
+  ParseSmoother(f, &d.smoother);
   f.RejectUnknownKeys();
 }
 
@@ -654,14 +671,37 @@ void CheckSensors(const ScenarioOptions& o, Checker* c) {
            noise.landmark_process_var.transpose(), "variances must not be negative");
 }
 
+// The online smoother's settings.
+void CheckSmoother(const robot_agent::SmootherOptions& s, Checker* c) {
+  c->Check(s.window_keyframes >= 2 && s.window_keyframes <= 10000, "filter.smoother.window_keyframes",
+           s.window_keyframes, "must be in 2..10000");
+  c->Check(s.max_keyframe_gap_steps >= 1 && s.max_keyframe_gap_steps <= 10000, "filter.smoother.max_keyframe_gap_steps",
+           s.max_keyframe_gap_steps, "must be in 1..10000");
+  c->Check(s.front_end_particles >= 1 && s.front_end_particles <= 100000, "filter.smoother.front_end_particles",
+           s.front_end_particles, "must be in 1..100000");
+  c->Check(s.huber_k > 0.0 && std::isfinite(s.huber_k), "filter.smoother.huber_k", s.huber_k, "must be positive");
+  c->Check(s.reading_gate_probability > 0.0 && s.reading_gate_probability < 1.0,
+           "filter.smoother.reading_gate_probability", s.reading_gate_probability, "must be in (0, 1)");
+  for (const auto& [key, sd] : {std::pair{"speed_factor_sd", s.speed_factor_sd},
+                                {"turn_factor_sd", s.turn_factor_sd},
+                                {"turn_bias_sd_radps", s.turn_bias_sd_radps}}) {
+    c->Check(sd > 0.0 && std::isfinite(sd), std::string("filter.smoother.") + key, sd, "must be positive");
+  }
+  c->Check(s.lost_after_keyframes >= 1, "filter.smoother.lost_after_keyframes", s.lost_after_keyframes,
+           "must be at least 1");
+  c->Check(s.min_recovery_readings >= 2, "filter.smoother.min_recovery_readings", s.min_recovery_readings,
+           "must be at least 2");
+}
+
 // The filter.
 void CheckFilter(const ScenarioOptions& o, Checker* c) {
   const auto& sensors = o.sensors;
   const auto& filter = o.filter;
   const auto& f = filter;
-  c->Check(f.type == "fastslam" || f.type == "ekf" || f.type == "ekf_ela", "filter.type", f.type,
-           "must be one of fastslam, ekf, ekf_ela");
+  c->Check(f.type == "fastslam" || f.type == "ekf" || f.type == "ekf_ela" || f.type == "smoother", "filter.type",
+           f.type, "must be one of fastslam, ekf, ekf_ela, smoother");
   c->Check(f.particles >= 1 && f.particles <= 1000000, "filter.particles", f.particles, "must be in 1..1000000");
+  CheckSmoother(f.smoother, c);
   if (f.motion_source == MotionSource::kImu) {
     c->Check(f.type == "fastslam", "filter.motion_source", "imu", "is supported by the fastslam filter only");
     c->Check(sensors.imu.enabled, "filter.motion_source", "imu", "needs sensors.imu.enabled");

@@ -21,7 +21,6 @@ using common::WrapAngle;
 
 // Variance of an angle about which nothing is known (uniform on a circle): pi^2 / 3. Reported as
 // the heading variance of a static point landmark.
-constexpr double kUnknownHeadingVar = kPi * kPi / 3.0;
 // A ghost (expected, unmatched mapped landmark) may be explained by motion over at most this
 // many frames since it was last seen.
 constexpr int kMaxGhostMotionFrames = 2;

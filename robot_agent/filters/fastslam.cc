@@ -22,7 +22,6 @@ using common::Pose2;
 using common::WrapAngle;
 
 // Variance of an angle about which nothing is known (uniform on a circle): pi^2 / 3.
-constexpr double kUnknownHeadingVar = kPi * kPi / 3.0;
 
 // Largest landmark speed the filter may meet: the fastest known candidate, else the bound.
 double MaxLandmarkSpeed(const FilterOptions& f) {
@@ -923,6 +922,14 @@ void FastSlam<D>::SetPeerState(Block* block, int lane, const MapLandmark& peer, 
     }
   }
   block->Set(lane, mean, cov);
+}
+
+template <int D>
+bool FastSlam<D>::Reseat(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  for (auto& particle : particles_) particle.pose = Pose2::FromVector(pose.Vector() + rng_.Gaussian<3>(covariance));
+  pose_ = pose;
+  pose_covariance_ = covariance;
+  return true;
 }
 
 template <int D>

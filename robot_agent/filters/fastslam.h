@@ -101,6 +101,8 @@ class FastSlam : public SlamFilter {
   // particles' pose covariance).
   bool ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen::Matrix2d& covariance, double range_m,
                          double bearing_rad, double gate) override;
+  // Every particle's pose drawn from N(pose, covariance), weights and maps kept.
+  bool Reseat(const common::Pose2& pose, const Eigen::Matrix3d& covariance) override;
 
   // Introspection for tests and benchmarks.
   int NumParticles() const { return static_cast<int>(particles_.size()); }

@@ -7,11 +7,15 @@
 
 #include <Eigen/Core>
 
+#include "common/angles.h"
 #include "common/se2.h"
 #include "common/sensor_types.h"
 #include "robot_agent/options/agent_options.h"
 
 namespace mrslam::robot_agent::filters {
+
+// The variance reported for a landmark heading nothing has shown: that of a uniform angle.
+inline constexpr double kUnknownHeadingVar = common::kPi * common::kPi / 3.0;
 
 enum class LandmarkMotionKind : std::uint8_t { kStatic = 0, kUnicycle = 1, kConstantTurnRate = 2 };
 
@@ -86,6 +90,10 @@ class SlamFilter {
   // own landmark (MatchLandmarks' kTooClose), which are left out. Returns how many were added.
   virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                              double gate_probability, double too_close_m) = 0;
+
+  // Moves every pose hypothesis to N(pose, covariance), the map kept: the robot was found
+  // elsewhere than its motion said. Returns whether the filter supports it (fastslam).
+  virtual bool Reseat(const common::Pose2& /*pose*/, const Eigen::Matrix3d& /*covariance*/) { return false; }
 
   // Cooperative localization: at the current step this robot detected, at (range_m,
   // bearing_rad), a robot whose position in the own frame is N(position, covariance). A filter

@@ -25,8 +25,27 @@ struct KnownKinematics {
   double w_radps = 0.0;
 };
 
+// The online smoother (filter.type smoother; docs/smoother.md): a fixed-lag keyframe graph fed by a
+// FastSLAM front end that labels the readings.
+struct SmootherOptions {
+  int window_keyframes = 40;                 // keyframes kept as unknowns; older ones are marginalized
+  int max_keyframe_gap_steps = 10;           // a keyframe at least this often, readings or not
+  int front_end_particles = 50;              // the front end's particles
+  double huber_k = 3.0;                      // the Huber loss's width on a reading's whitened residual norm
+  double reading_gate_probability = 0.9999;  // chi-square 2 dof gate of a reading at the solution
+  // Prior standard deviations of the odometry correction: speed factor, turn-rate factor,
+  // turn-rate bias (rad/s), about (1, 1, 0).
+  double speed_factor_sd = 0.1;
+  double turn_factor_sd = 0.1;
+  double turn_bias_sd_radps = 0.05;
+  // Lost: this many keyframes in a row with at least min_recovery_readings readings of which at
+  // most half fit the map; then the pose is searched again among the mapped landmarks.
+  int lost_after_keyframes = 3;
+  int min_recovery_readings = 3;
+};
+
 struct FilterOptions {
-  std::string type = "fastslam";  // fastslam | ekf | ekf_ela
+  std::string type = "fastslam";  // fastslam | ekf | ekf_ela | smoother
   int particles = 1000;
   MotionSource motion_source = MotionSource::kOdometry;
   Proposal proposal = Proposal::kMeasurement;
@@ -83,6 +102,7 @@ struct FilterOptions {
   // FastSLAM, identified detections: beyond this chi-square 2 dof gate a reading is an outlier
   // and ignored (1: no gate).
   double outlier_gate_probability = 1.0;
+  SmootherOptions smoother;
 };
 
 struct RendezvousOptions {

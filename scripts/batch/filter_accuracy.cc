@@ -11,7 +11,7 @@
 
 #include "common/config/agent_options_projection.h"
 #include "common/se2.h"
-#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/smoother/batch_smoother.h"
 #include "scripts/batch/batch_report.h"
@@ -31,7 +31,7 @@ class Estimator {
       reference_ = std::make_unique<robot_agent::smoother::BatchSmoother>(OracleSmoother(options, {robot_index}));
     } else {
       filter_ =
-          robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, options.robots[robot_index].id), seed);
+          robot_agent::factory::CreateFilter(common::AgentOptionsFor(options, options.robots[robot_index].id), seed);
       if (!filter_) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
     }
   }

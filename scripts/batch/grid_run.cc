@@ -16,7 +16,7 @@
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
-#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/node/msg_conversion.h"
 #include "scripts/launch/domain_picker.h"
@@ -141,7 +141,7 @@ Row RunJob(const common::ScenarioOptions& base, const Job& job, int frames) {
   }
   std::vector<std::unique_ptr<robot_agent::filters::SlamFilter>> filters;
   for (const auto& robot : options.robots) {
-    filters.push_back(robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, robot.id), options.seed));
+    filters.push_back(robot_agent::factory::CreateFilter(common::AgentOptionsFor(options, robot.id), options.seed));
     if (!filters.back()) throw std::runtime_error("filter.type " + job.filter + " is not implemented");
   }
   evaluator::PaperBScorer scorer = MakeScorer(options);

@@ -43,6 +43,7 @@ constexpr int kBadInputDomain = 123;
 constexpr int kSeedsDomain = 124;
 constexpr int kSeedFailsDomain = 125;
 constexpr int kForeignDomain = 126;
+constexpr int kSmootherDomain = 127;
 
 constexpr int kShortSteps = 12;
 
@@ -270,6 +271,25 @@ TEST(LauncherTest, BadScenarioExitsOneWithOneLineNamingTheKey) {
   EXPECT_THAT(output, HasSubstr("sensors.lidar.range_noise_sd_m"));
   EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 1) << output;
   EXPECT_TRUE(ChildrenOf(launcher.pid()).empty());
+  std::filesystem::remove(out + ".log");
+}
+
+TEST(LauncherTest, TheOnlineSmootherRunsInLockstepAndBeatsDeadReckoning) {
+  // The whole paper run (100 steps, rendezvous on) with every agent running the online smoother.
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-launch-smoother");
+  const std::string& out = temp_dir.path();
+  ChildProcess launcher(LaunchArgs(out, kSmootherDomain, {"--set", "filter.type=smoother", "--no-plots"}),
+                        out + ".log");
+  ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + ".log");
+  const auto s = nlohmann::json::parse(ReadFile(out + "/summary.json"));
+  for (const std::string id : {"r1", "r2"}) {
+    const auto& robot = s["robots"][id];
+    ExpectFiniteAtLeast(robot, "mean_nees", 0.0, id);
+    ExpectFiniteAtLeast(robot, "step_cpu_ms_median", 0.0, id);
+    EXPECT_LT(robot["position_rmse_m"].get<double>(), robot["dead_reckoning_rmse_m"].get<double>()) << id;
+    EXPECT_LT(robot["mean_nees"].get<double>(), 30.0) << id;
+  }
   std::filesystem::remove(out + ".log");
 }
 

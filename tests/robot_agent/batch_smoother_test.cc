@@ -14,7 +14,7 @@
 #include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
-#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "scripts/batch/oracle_reference.h"
 #include "world_sim/source/step_source_factory.h"
@@ -40,7 +40,7 @@ RunErrors RunR1(const common::ScenarioOptions& options, bool with_filter) {
   const common::Pose2 frame = source->Truth().frames.at(0).second;
   BatchSmoother reference = batch::OracleSmoother(options, {0});
   std::unique_ptr<robot_agent::filters::SlamFilter> filter;
-  if (with_filter) filter = robot_agent::filters::CreateFilter(common::AgentOptionsFor(options, "r1"), options.seed);
+  if (with_filter) filter = robot_agent::factory::CreateFilter(common::AgentOptionsFor(options, "r1"), options.seed);
   common::Pose2 dead_reckoning = common::InitialPoseInOwnFrame(options.robots[0]);
   RunErrors e;
   for (int k = 0; k < options.run.steps; ++k) {

@@ -10,13 +10,13 @@ mrslam_add_test(rendezvous_test
   LIBS mrslam_agent_cooperation)
 mrslam_add_test(cooperation_test
   SOURCES cooperation_test.cc
-  LIBS mrslam_agent_cooperation mrslam_config)
+  LIBS mrslam_agent_cooperation mrslam_agent_factory mrslam_config)
 mrslam_add_test(peer_input_test
   SOURCES peer_input_test.cc
-  LIBS mrslam_agent_cooperation mrslam_config)
+  LIBS mrslam_agent_cooperation mrslam_agent_factory mrslam_config)
 mrslam_add_test(fastslam_merge_test
   SOURCES fastslam_merge_test.cc
-  LIBS mrslam_agent_cooperation mrslam_config)
+  LIBS mrslam_agent_cooperation mrslam_agent_factory mrslam_config)
 mrslam_add_test(joint_transform_test
   SOURCES joint_transform_test.cc
-  LIBS mrslam_agent_cooperation mrslam_config mrslam_world_source)
+  LIBS mrslam_agent_cooperation mrslam_agent_factory mrslam_config mrslam_world_source)

@@ -3,7 +3,7 @@
 // filter on a small simulated world (consistency, association, map merging).
 #include "robot_agent/filters/ekf_slam.h"
 #include "common/config/agent_options_projection.h"
-#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/factory/filter_factory.h"
 
 #include <cmath>
 #include <memory>
@@ -19,6 +19,7 @@
 namespace mrslam::robot_agent::filters {
 namespace {
 
+using factory::CreateFilter;
 using testing::AddLandmark;
 using testing::OneRobotScenario;
 using testing::TinyWorld;

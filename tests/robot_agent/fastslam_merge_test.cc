@@ -11,8 +11,8 @@
 #include "common/config/agent_options_projection.h"
 #include "common/gaussian.h"
 #include "robot_agent/cooperation/cooperation.h"
+#include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/filters/fastslam.h"
-#include "robot_agent/filters/filter_factory.h"
 #include "tests/robot_agent/tiny_world.h"
 
 namespace mrslam::robot_agent::cooperation {
@@ -32,7 +32,7 @@ class WithFastSlam : public ::testing::TestWithParam<robot_agent::LandmarkKinema
     r2.frame_in_world = {1.0, 1.0, 0.5};
     options_.robots.push_back(r2);
     options_.rendezvous.enable_from_step = 0;
-    filter_ = filters::CreateFilter(common::AgentOptionsFor(options_, "r1"), 3);
+    filter_ = factory::CreateFilter(common::AgentOptionsFor(options_, "r1"), 3);
     testing::TinyWorld world(options_, 3);
     for (int k = 0; k < 8; ++k) filter_->Process(world.Step());
     ASSERT_EQ(filter_->Estimate().landmarks.size(), 2u);

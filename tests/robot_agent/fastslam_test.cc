@@ -10,13 +10,14 @@
 
 #include "common/angles.h"
 #include "common/config/agent_options_projection.h"
-#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "tests/robot_agent/tiny_world.h"
 
 namespace mrslam::robot_agent::filters {
 namespace {
 
+using factory::CreateFilter;
 using testing::AddLandmark;
 using testing::OneRobotScenario;
 using testing::TinyWorld;

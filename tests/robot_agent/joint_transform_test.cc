@@ -13,7 +13,7 @@
 #include "common/se2.h"
 #include "robot_agent/cooperation/cooperation.h"
 #include "robot_agent/cooperation/rendezvous.h"
-#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "world_sim/source/step_source_factory.h"
 
@@ -38,8 +38,8 @@ Outcome RunToTheFirstJointEstimate(const common::ScenarioOptions& o) {
   Outcome out;
   out.truth = common::Between(frames[0].second, frames[1].second);
   const std::string ids[2] = {o.robots[0].id, o.robots[1].id};
-  std::unique_ptr<filters::SlamFilter> slams[2] = {filters::CreateFilter(common::AgentOptionsFor(o, ids[0]), o.seed),
-                                                   filters::CreateFilter(common::AgentOptionsFor(o, ids[1]), o.seed)};
+  std::unique_ptr<filters::SlamFilter> slams[2] = {factory::CreateFilter(common::AgentOptionsFor(o, ids[0]), o.seed),
+                                                   factory::CreateFilter(common::AgentOptionsFor(o, ids[1]), o.seed)};
   Cooperation agents[2] = {Cooperation(common::AgentOptionsFor(o, ids[0])),
                            Cooperation(common::AgentOptionsFor(o, ids[1]))};
   PeerInbox inbox[2];

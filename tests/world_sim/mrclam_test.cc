@@ -20,7 +20,7 @@
 
 #include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
-#include "robot_agent/filters/filter_factory.h"
+#include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "tests/test_paths.h"
 #include "world_sim/replay/mrclam_reader.h"
@@ -329,7 +329,7 @@ TEST(MrclamCalibrationTest, FastSlamDelaysAndScalesTheCommands) {
   o.filter.odometry_scale = 0.9;
   o.filter.odometry_turn_scale = 0.8;
   o.filter.odometry_lag_s = 0.2;
-  const auto filter = robot_agent::filters::CreateFilter(common::AgentOptionsFor(o, "r1"), 1);
+  const auto filter = robot_agent::factory::CreateFilter(common::AgentOptionsFor(o, "r1"), 1);
   ASSERT_NE(filter, nullptr);
   std::vector<double> x;
   double heading = 0.0;

@@ -1,0 +1,683 @@
+#include "robot_agent/smoother/keyframe_graph.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "common/angles.h"
+#include "common/gaussian.h"
+#include "robot_agent/filters/landmark_ekf.h"
+#include "robot_agent/smoother/whitened_rows.h"
+
+namespace mrslam::robot_agent::smoother {
+namespace {
+
+using common::Pose2;
+using common::WrapAngle;
+
+double Sd(double var) { return std::sqrt(std::max(var, 1e-12)); }
+
+// Between(a, b) as a vector, and its Jacobians with respect to a and b.
+struct BetweenJacobians {
+  Eigen::Vector3d value;
+  Eigen::Matrix3d ja, jb;
+};
+BetweenJacobians BetweenWithJacobians(const Pose2& a, const Pose2& b) {
+  const double c = std::cos(a.heading), s = std::sin(a.heading);
+  const double dx = b.x - a.x, dy = b.y - a.y;
+  BetweenJacobians out;
+  out.value << c * dx + s * dy, -s * dx + c * dy, WrapAngle(b.heading - a.heading);
+  out.ja << -c, -s, -s * dx + c * dy, s, -c, -c * dx - s * dy, 0.0, 0.0, -1.0;
+  out.jb << c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0;
+  return out;
+}
+
+}  // namespace
+
+// The rows plus the robust cost (the Huber cost of the readings, squares elsewhere).
+struct KeyframeGraph::Rows : WhitenedRows {
+  double robust_cost = 0.0;
+};
+
+KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
+    : dt_s_(options.dt_s),
+      window_keyframes_(std::max(2, options.filter.smoother.window_keyframes)),
+      huber_k_(options.filter.smoother.huber_k),
+      gate_(common::ChiSquare2Quantile(options.filter.smoother.reading_gate_probability)),
+      robot_var_(options.noise.robot_process_var),
+      landmark_var_(options.noise.landmark_process_var),
+      z_w_(1.0 / Sd(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
+           1.0 / Sd(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad)) {
+  Keyframe first;
+  first.pose = start;
+  first.fixed = true;
+  window_.push_back(first);
+  const auto& o = options.filter.smoother;
+  const Eigen::Vector3d sd(o.speed_factor_sd, o.turn_factor_sd, o.turn_bias_sd_radps);
+  prior_.vars = {{Var::kCorrection, 0}};
+  prior_.x0 = {correction_};
+  prior_.h = sd.cwiseProduct(sd).cwiseInverse().asDiagonal();
+  prior_.g = Eigen::Vector3d::Zero();
+}
+
+Pose2 KeyframeGraph::Increment(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction) const {
+  Pose2 out;
+  for (const auto& step : steps) {
+    for (const auto& m : step) {
+      out = common::UnicycleStep(out, correction(0) * m.v_mps, correction(1) * m.w_radps + correction(2), m.dt_s);
+    }
+  }
+  return out;
+}
+
+// d Increment / d correction by central differences (heading differences wrapped).
+Eigen::Matrix3d KeyframeGraph::IncrementJacobian(const std::vector<std::vector<Motion>>& steps) const {
+  constexpr double kH = 1e-6;
+  Eigen::Matrix3d j;
+  for (int c = 0; c < 3; ++c) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    d(c) = kH;
+    const Pose2 plus = Increment(steps, correction_ + d), minus = Increment(steps, correction_ - d);
+    j.col(c) = Eigen::Vector3d(plus.x - minus.x, plus.y - minus.y, WrapAngle(plus.heading - minus.heading)) / (2 * kH);
+  }
+  return j;
+}
+
+namespace {
+
+// The covariance of a composition of per-step increments, each with additive noise of
+// variances var in the frame it starts from: Sigma_i = J Sigma_{i-1} J^T + diag(var).
+Eigen::Matrix3d Accumulate(const std::vector<Pose2>& increments, const Eigen::Vector3d& var) {
+  Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
+  Pose2 delta;
+  for (const Pose2& d : increments) {
+    const Eigen::Matrix3d j = common::ComposeJacobianLeft(delta, d);
+    sigma = j * sigma * j.transpose();
+    sigma.diagonal() += var.unaryExpr([](double v) { return std::max(v, 1e-12); });
+    delta = common::Compose(delta, d);
+  }
+  return sigma;
+}
+
+}  // namespace
+
+Eigen::Matrix3d KeyframeGraph::AccumulatedCovariance(const std::vector<std::vector<Motion>>& steps) const {
+  std::vector<Pose2> increments;
+  increments.reserve(steps.size());
+  for (const auto& step : steps) increments.push_back(Increment({step}, correction_));
+  return Accumulate(increments, robot_var_);
+}
+
+Pose2 KeyframeGraph::MoverIncrement(const MoverModel& model, int steps) const {
+  Pose2 out;
+  for (int i = 0; i < steps; ++i) out = common::UnicycleStep(out, model.v_mps, model.w_radps, dt_s_);
+  return out;
+}
+
+Eigen::Matrix3d KeyframeGraph::MoverWhitening(const MoverModel& model, int steps) const {
+  const std::vector<Pose2> increments(steps, MoverIncrement(model, 1));
+  const Eigen::Matrix3d sigma = Accumulate(increments, landmark_var_);
+  return Eigen::Matrix3d(sigma.llt().matrixL()).inverse();
+}
+
+void KeyframeGraph::AddMotion(const std::vector<Motion>& segments) { pending_.push_back(segments); }
+
+void KeyframeGraph::AddKeyframe(int step, const std::vector<Reading>& readings) {
+  Keyframe kf;
+  kf.step = step;
+  kf.pose = common::Compose(window_.back().pose, Increment(pending_, correction_));
+  kf.has_odometry = true;
+  kf.steps = std::move(pending_);
+  pending_.clear();
+  const Eigen::Matrix3d sigma = AccumulatedCovariance(kf.steps);
+  kf.odometry_whitening = Eigen::Matrix3d(sigma.llt().matrixL()).inverse();
+  for (const auto& z : readings) {
+    if (std::isfinite(z.range_m) && std::isfinite(z.bearing_rad)) kf.readings.push_back({z, true});
+  }
+  window_.push_back(std::move(kf));
+  while (static_cast<int>(window_.size()) > window_keyframes_) Marginalize();
+}
+
+void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::uint32_t>& from_to) {
+  for (auto& kf : window_) {
+    if (kf.step < from_step) continue;
+    for (auto& r : kf.readings) {
+      const auto it = from_to.find(r.z.track);
+      if (it != from_to.end()) {
+        r.z.track = it->second;
+        r.inlier = true;
+      }
+    }
+  }
+}
+
+void KeyframeGraph::CutAndMove(int from_step, const Pose2& correction) {
+  bool cut = false;
+  for (auto& kf : window_) {
+    if (kf.step < from_step || kf.fixed) continue;
+    if (!cut) {
+      kf.has_odometry = false;
+      cut = true;
+    }
+    kf.pose = common::Compose(correction, kf.pose);
+    for (auto& r : kf.readings) r.inlier = true;
+  }
+}
+
+Eigen::VectorXd KeyframeGraph::Value(const Var& v) const {
+  switch (v.kind) {
+    case Var::kPose:
+      return FindKeyframe(static_cast<int>(v.key))->pose.Vector();
+    case Var::kLandmark:
+      return landmarks_.at(static_cast<std::uint32_t>(v.key));
+    case Var::kMover:
+      return movers_.at(v.key).Vector();
+    case Var::kCorrection:
+      return correction_;
+  }
+  return {};
+}
+
+void KeyframeGraph::SetValue(const Var& v, const Eigen::VectorXd& value) {
+  switch (v.kind) {
+    case Var::kPose:
+      FindKeyframe(static_cast<int>(v.key))->pose = Pose2::FromVector(value);
+      return;
+    case Var::kLandmark:
+      landmarks_[static_cast<std::uint32_t>(v.key)] = value;
+      return;
+    case Var::kMover:
+      movers_[v.key] = Pose2::FromVector(value);
+      return;
+    case Var::kCorrection:
+      correction_ = value;
+      return;
+  }
+}
+
+Eigen::VectorXd KeyframeGraph::Difference(const Var& v, const Eigen::VectorXd& x0) const {
+  Eigen::VectorXd d = Value(v) - x0;
+  if (v.kind == Var::kPose || v.kind == Var::kMover) d(2) = WrapAngle(d(2));
+  return d;
+}
+
+const KeyframeGraph::Keyframe* KeyframeGraph::FindKeyframe(int step) const {
+  for (const auto& kf : window_) {
+    if (kf.step == step) return &kf;
+  }
+  return nullptr;
+}
+
+KeyframeGraph::Keyframe* KeyframeGraph::FindKeyframe(int step) {
+  return const_cast<Keyframe*>(std::as_const(*this).FindKeyframe(step));
+}
+
+std::vector<KeyframeGraph::Var> KeyframeGraph::Variables(bool only_oldest) const {
+  std::set<Var> vars(prior_.vars.begin(), prior_.vars.end());
+  vars.insert({Var::kCorrection, 0});
+  const std::size_t kfs = only_oldest ? std::min<std::size_t>(2, window_.size()) : window_.size();
+  for (std::size_t i = 0; i < kfs; ++i) {
+    const Keyframe& kf = window_[i];
+    if (!kf.fixed) vars.insert({Var::kPose, kf.step});
+    if (only_oldest && i > 0) continue;
+    for (const auto& r : kf.readings) {
+      if (Active(r) && landmarks_.count(r.z.track) > 0) vars.insert({Var::kLandmark, r.z.track});
+    }
+  }
+  // Mover states: all (only_oldest: those at the oldest keyframe and their successors).
+  const int oldest_step = window_.front().step;
+  std::vector<Var> eliminated;
+  if (!window_.front().fixed) eliminated.push_back({Var::kPose, oldest_step});
+  for (const auto& [key, state] : movers_) {
+    if (MoverStep(key) == oldest_step) eliminated.push_back({Var::kMover, key});
+    if (!only_oldest) vars.insert({Var::kMover, key});
+  }
+  if (only_oldest) {
+    for (const Var& v : eliminated) {
+      if (v.kind != Var::kMover) continue;
+      const std::vector<int> chain = ChainSteps(MoverTrack(v.key));
+      if (chain.size() > 1) vars.insert({Var::kMover, MoverKey(MoverTrack(v.key), chain[1])});
+    }
+  }
+  // The oldest keyframe's pose and mover states first: a marginalization eliminates them.
+  for (const Var& v : eliminated) vars.erase(v);
+  std::vector<Var> out = eliminated;
+  out.insert(out.end(), vars.begin(), vars.end());
+  return out;
+}
+
+KeyframeGraph::Layout KeyframeGraph::MakeLayout(const std::vector<Var>& vars) const {
+  Layout layout;
+  for (const Var& v : vars) {
+    layout.col[v] = layout.cols;
+    layout.cols += Dim(v);
+  }
+  return layout;
+}
+
+std::vector<int> KeyframeGraph::ChainSteps(std::uint32_t track) const {
+  std::vector<int> steps;
+  for (auto it = movers_.lower_bound(MoverKey(track, 0)); it != movers_.end() && MoverTrack(it->first) == track; ++it) {
+    steps.push_back(MoverStep(it->first));
+  }
+  return steps;
+}
+
+// Every moving track's chain spans the keyframes from its first state (or reading) to its last
+// reading; missing states are predicted by its model from the one before, a new chain starts at
+// its first reading.
+void KeyframeGraph::StartMovers() {
+  for (const std::uint32_t track : moving_tracks_) {
+    const MoverModel& model = mover_models_.at(track);
+    int last_reading = -1;
+    for (const auto& kf : window_) {
+      for (const auto& r : kf.readings) {
+        if (r.inlier && r.z.track == track) last_reading = kf.step;
+      }
+    }
+    if (last_reading < 0) continue;
+    const Pose2* previous = nullptr;
+    int previous_step = 0;
+    for (const auto& kf : window_) {
+      if (kf.step > last_reading) break;
+      const std::int64_t key = MoverKey(track, kf.step);
+      if (movers_.count(key) == 0) {
+        if (previous != nullptr) {
+          movers_[key] = common::Compose(*previous, MoverIncrement(model, kf.step - previous_step));
+        } else {
+          bool started = false;
+          for (const auto& r : kf.readings) {
+            if (started || !r.inlier || r.z.track != track) continue;
+            const Eigen::Vector2d p = common::PointFromRangeBearing(kf.pose, {r.z.range_m, r.z.bearing_rad});
+            movers_[key] = Pose2{p.x(), p.y(), model.start_heading};
+            chain_starts_[key] = model.start_heading;
+            started = true;
+          }
+          if (!started) continue;
+        }
+      }
+      previous = &movers_.at(key);
+      previous_step = kf.step;
+    }
+  }
+}
+
+void KeyframeGraph::DropStoppedChains() {
+  const std::set<Var> held(prior_.vars.begin(), prior_.vars.end());
+  for (auto it = movers_.begin(); it != movers_.end();) {
+    if (moving_tracks_.count(MoverTrack(it->first)) == 0 && held.count({Var::kMover, it->first}) == 0) {
+      chain_starts_.erase(it->first);
+      it = movers_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void KeyframeGraph::StartLandmarks() {
+  for (const auto& kf : window_) {
+    for (const auto& r : kf.readings) {
+      if (!Active(r) || landmarks_.count(r.z.track) > 0) continue;
+      landmarks_[r.z.track] = common::PointFromRangeBearing(kf.pose, {r.z.range_m, r.z.bearing_rad});
+    }
+  }
+}
+
+Eigen::Vector2d KeyframeGraph::WhitenedResidual(const Pose2& x, const Eigen::Vector2d& p, const Reading& z) const {
+  const common::RangeBearing h = common::MeasureRangeBearing(x, p);
+  return {(z.range_m - h.range_m) * z_w_(0), WrapAngle(z.bearing_rad - h.bearing_rad) * z_w_(1)};
+}
+
+void KeyframeGraph::AddOdometryRows(const Layout& layout, const Keyframe& previous, const Keyframe& kf,
+                                    Rows* rows) const {
+  const BetweenJacobians b = BetweenWithJacobians(previous.pose, kf.pose);
+  const Pose2 delta = Increment(kf.steps, correction_);
+  Eigen::Vector3d e = b.value - delta.Vector();
+  e(2) = WrapAngle(e(2));
+  const Eigen::Matrix3d& w = kf.odometry_whitening;
+  const Eigen::Vector3d r = w * e;
+  rows->robust_cost += r.squaredNorm();
+  const int c_col = layout.Col({Var::kCorrection, 0});
+  const Eigen::Matrix3d jc = c_col < 0 ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(-w * IncrementJacobian(kf.steps));
+  rows->Add(r, {{previous.fixed ? -1 : layout.Col({Var::kPose, previous.step}), w * b.ja},
+                {layout.Col({Var::kPose, kf.step}), w * b.jb},
+                {c_col, jc}});
+}
+
+void KeyframeGraph::AddReadingRows(const Layout& layout, const Keyframe& kf, Rows* rows) const {
+  const int x_col = kf.fixed ? -1 : layout.Col({Var::kPose, kf.step});
+  for (const auto& stored : kf.readings) {
+    const bool mover = MoverReading(stored, kf.step);
+    if (!Active(stored) && !mover) continue;
+    const Var target =
+        mover ? Var{Var::kMover, MoverKey(stored.z.track, kf.step)} : Var{Var::kLandmark, stored.z.track};
+    const int p_col = layout.Col(target);
+    if (p_col < 0) continue;
+    const Eigen::Vector2d p = mover ? movers_.at(target.key).Translation() : landmarks_.at(stored.z.track);
+    Eigen::Vector2d r = WhitenedResidual(kf.pose, p, stored.z);
+    const double s = r.norm();
+    const double scale = s > huber_k_ ? std::sqrt(huber_k_ / s) : 1.0;
+    rows->robust_cost += s > huber_k_ ? 2.0 * huber_k_ * s - huber_k_ * huber_k_ : s * s;
+    r *= scale;
+    const Eigen::Matrix2d w = scale * z_w_.asDiagonal();
+    Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, Dim(target));
+    jp.leftCols<2>() = -w * filters::MeasurementJacobianLandmark(p, kf.pose);
+    rows->Add(r, {{x_col, -w * filters::MeasurementJacobianPose(p, kf.pose)}, {p_col, jp}});
+  }
+}
+
+void KeyframeGraph::AddMoverRows(const Layout& layout, std::uint32_t track, int from_step, int to_step,
+                                 Rows* rows) const {
+  const auto model = mover_models_.find(track);
+  if (model == mover_models_.end()) return;
+  const Var a{Var::kMover, MoverKey(track, from_step)}, b{Var::kMover, MoverKey(track, to_step)};
+  const BetweenJacobians between = BetweenWithJacobians(movers_.at(a.key), movers_.at(b.key));
+  Eigen::Vector3d e = between.value - MoverIncrement(model->second, to_step - from_step).Vector();
+  e(2) = WrapAngle(e(2));
+  const Eigen::Matrix3d w = MoverWhitening(model->second, to_step - from_step);
+  const Eigen::Vector3d r = w * e;
+  rows->robust_cost += r.squaredNorm();
+  rows->Add(r, {{layout.Col(a), w * between.ja}, {layout.Col(b), w * between.jb}});
+}
+
+void KeyframeGraph::BuildRows(const Layout& layout, bool only_oldest, Rows* rows) const {
+  const std::size_t last = only_oldest ? std::min<std::size_t>(1, window_.size() - 1) : window_.size() - 1;
+  for (std::size_t i = 0; i <= last; ++i) {
+    if (i > 0 && window_[i].has_odometry) AddOdometryRows(layout, window_[i - 1], window_[i], rows);
+    if (!only_oldest || i == 0) AddReadingRows(layout, window_[i], rows);
+  }
+  const int oldest = window_.front().step;
+  std::uint32_t track = 0;
+  int previous = -1;
+  for (const auto& [key, state] : movers_) {
+    const bool same_chain = MoverTrack(key) == track && previous >= 0;
+    if (same_chain && (!only_oldest || previous == oldest)) AddMoverRows(layout, track, previous, MoverStep(key), rows);
+    track = MoverTrack(key);
+    previous = MoverStep(key);
+    if (chain_starts_.count(key) > 0 && (!only_oldest || previous == oldest)) {
+      // The weak prior on the heading the chain started with.
+      Eigen::MatrixXd j = Eigen::MatrixXd::Zero(1, 3);
+      j(0, 2) = 1e-3;
+      const Eigen::VectorXd r = Eigen::VectorXd::Constant(1, 1e-3 * WrapAngle(state.heading - chain_starts_.at(key)));
+      rows->robust_cost += r.squaredNorm();
+      rows->Add(r, {{layout.Col({Var::kMover, key}), j}});
+    }
+  }
+}
+
+void KeyframeGraph::AddPrior(const Layout& layout, std::vector<Eigen::Triplet<double>>* h, Eigen::VectorXd* g,
+                             double* cost) const {
+  const int n = static_cast<int>(prior_.g.size());
+  Eigen::VectorXd d(n);
+  std::vector<int> cols;
+  for (std::size_t v = 0, o = 0; v < prior_.vars.size(); o += Dim(prior_.vars[v]), ++v) {
+    d.segment(static_cast<int>(o), Dim(prior_.vars[v])) = Difference(prior_.vars[v], prior_.x0[v]);
+    const int c = layout.Col(prior_.vars[v]);
+    for (int k = 0; k < Dim(prior_.vars[v]); ++k) cols.push_back(c < 0 ? -1 : c + k);
+  }
+  const Eigen::VectorXd hd = prior_.h * d;
+  *cost += d.dot(hd) + 2.0 * prior_.g.dot(d);
+  for (int i = 0; i < n; ++i) {
+    if (cols[i] < 0) continue;
+    (*g)(cols[i]) += hd(i) + prior_.g(i);
+    for (int j = 0; j < n; ++j) {
+      if (cols[j] >= 0 && prior_.h(i, j) != 0.0) h->emplace_back(cols[i], cols[j], prior_.h(i, j));
+    }
+  }
+}
+
+// One Levenberg-Marquardt solve over the window; returns the final cost.
+double KeyframeGraph::SolveOnce() {
+  StartLandmarks();
+  StartMovers();
+  const std::vector<Var> vars = Variables(false);
+  const Layout layout = MakeLayout(vars);
+  auto evaluate = [&](Eigen::SparseMatrix<double>* h, Eigen::VectorXd* g) {
+    Rows rows;
+    BuildRows(layout, false, &rows);
+    double cost = rows.robust_cost;
+    if (h == nullptr) {
+      Eigen::VectorXd unused = Eigen::VectorXd::Zero(layout.cols);
+      std::vector<Eigen::Triplet<double>> t;
+      AddPrior(layout, &t, &unused, &cost);
+      return cost;
+    }
+    const Eigen::SparseMatrix<double> j = rows.Matrix(layout.cols);
+    const Eigen::Map<const Eigen::VectorXd> r(rows.residual.data(), static_cast<int>(rows.residual.size()));
+    *g = j.transpose() * r;
+    std::vector<Eigen::Triplet<double>> t;
+    AddPrior(layout, &t, g, &cost);
+    Eigen::SparseMatrix<double> p(layout.cols, layout.cols);
+    p.setFromTriplets(t.begin(), t.end());
+    *h = Eigen::SparseMatrix<double>(j.transpose() * j) + p;
+    return cost;
+  };
+  auto apply = [&](const Eigen::VectorXd& delta) {
+    for (const Var& v : vars) SetValue(v, Value(v) + delta.segment(layout.Col(v), Dim(v)));
+  };
+  double lambda = 1e-6, cost = 0.0;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    Eigen::SparseMatrix<double> h;
+    Eigen::VectorXd g;
+    cost = evaluate(&h, &g);
+    const Eigen::VectorXd diag = h.diagonal();
+    for (int c = 0; c < layout.cols; ++c) h.coeffRef(c, c) += lambda * std::max(diag(c), 1e-9);
+    if (iteration == 0) solver.analyzePattern(h);
+    solver.factorize(h);
+    const Eigen::VectorXd delta = solver.solve(-g);
+    if (solver.info() != Eigen::Success || !delta.allFinite()) break;
+    std::map<Var, Eigen::VectorXd> saved;
+    for (const Var& v : vars) saved[v] = Value(v);
+    apply(delta);
+    const double after = evaluate(nullptr, nullptr);
+    if (after > cost) {
+      for (const auto& [v, x] : saved) SetValue(v, x);
+      lambda *= 10.0;
+      if (lambda > 1e6) break;
+      continue;
+    }
+    cost = after;
+    lambda = std::max(lambda / 10.0, 1e-9);
+    if (delta.cwiseAbs().maxCoeff() < 1e-7) break;
+  }
+  return cost;
+}
+
+bool KeyframeGraph::UpdateInliers() {
+  bool changed = false;
+  for (auto& kf : window_) {
+    for (auto& r : kf.readings) {
+      const auto mover = movers_.find(MoverKey(r.z.track, kf.step));
+      const auto it = landmarks_.find(r.z.track);
+      Eigen::Vector2d p;
+      if (moving_tracks_.count(r.z.track) > 0 && mover != movers_.end()) {
+        p = mover->second.Translation();
+      } else if (it != landmarks_.end()) {
+        p = it->second;
+      } else {
+        continue;
+      }
+      const bool inlier = WhitenedResidual(kf.pose, p, r.z).squaredNorm() <= gate_;
+      changed = changed || inlier != r.inlier;
+      r.inlier = inlier;
+    }
+  }
+  return changed;
+}
+
+void KeyframeGraph::Solve() {
+  SolveOnce();
+  for (int round = 0; round < 3 && UpdateInliers(); ++round) SolveOnce();
+  ComputeCovariances();
+}
+
+void KeyframeGraph::Marginalize() {
+  StartLandmarks();
+  StartMovers();
+  const std::vector<Var> vars = Variables(true);
+  const Layout layout = MakeLayout(vars);
+  Rows rows;
+  BuildRows(layout, true, &rows);
+  const Eigen::SparseMatrix<double> j = rows.Matrix(layout.cols);
+  const Eigen::Map<const Eigen::VectorXd> r(rows.residual.data(), static_cast<int>(rows.residual.size()));
+  Eigen::VectorXd g = j.transpose() * r;
+  std::vector<Eigen::Triplet<double>> t;
+  double unused = 0.0;
+  AddPrior(layout, &t, &g, &unused);
+  Eigen::SparseMatrix<double> p(layout.cols, layout.cols);
+  p.setFromTriplets(t.begin(), t.end());
+  const Eigen::MatrixXd h = Eigen::MatrixXd(j.transpose() * j) + Eigen::MatrixXd(p);
+  const Keyframe& oldest = window_.front();
+  // The oldest pose's and mover states' columns come first.
+  std::size_t eliminated = 0;
+  int m = 0;
+  while (eliminated < vars.size() &&
+         (vars[eliminated].kind == Var::kMover ? MoverStep(vars[eliminated].key) == oldest.step
+                                               : vars[eliminated] == Var{Var::kPose, oldest.step})) {
+    m += Dim(vars[eliminated++]);
+  }
+  const int n = layout.cols - m;
+  Prior next;
+  next.vars.assign(vars.begin() + static_cast<std::ptrdiff_t>(eliminated), vars.end());
+  for (const Var& v : next.vars) next.x0.push_back(Value(v));
+  next.h = h.bottomRightCorner(n, n);
+  next.g = g.tail(n);
+  if (m > 0) {
+    // (A state without information left, e.g. of a chain that ended, is dropped.)
+    const Eigen::MatrixXd hmm = h.topLeftCorner(m, m) + 1e-9 * Eigen::MatrixXd::Identity(m, m);
+    const Eigen::MatrixXd hrm = h.bottomLeftCorner(n, m);
+    const Eigen::MatrixXd k = hrm * hmm.ldlt().solve(Eigen::MatrixXd::Identity(m, m));
+    next.h -= k * hrm.transpose();
+    next.g -= k * g.head(m);
+  }
+  next.h = 0.5 * (next.h + next.h.transpose());
+  prior_ = std::move(next);
+  for (std::size_t i = 0; i < eliminated; ++i) {
+    if (vars[i].kind != Var::kMover) continue;
+    movers_.erase(vars[i].key);
+    chain_starts_.erase(vars[i].key);
+  }
+  history_.emplace_back(oldest.step, oldest.pose);
+  window_.pop_front();
+  window_.front().has_odometry = false;
+}
+
+void KeyframeGraph::ComputeCovariances() {
+  const std::vector<Var> vars = Variables(false);
+  const Layout layout = MakeLayout(vars);
+  Rows rows;
+  BuildRows(layout, false, &rows);
+  const Eigen::SparseMatrix<double> j = rows.Matrix(layout.cols);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(layout.cols);
+  std::vector<Eigen::Triplet<double>> t;
+  double unused = 0.0;
+  AddPrior(layout, &t, &g, &unused);
+  Eigen::SparseMatrix<double> p(layout.cols, layout.cols);
+  p.setFromTriplets(t.begin(), t.end());
+  // A variable nothing informs (a mover's state whose only reading left the gate) gets variance
+  // 1e9 instead of making the information singular.
+  Eigen::SparseMatrix<double> identity(layout.cols, layout.cols);
+  identity.setIdentity();
+  const Eigen::SparseMatrix<double> h = Eigen::SparseMatrix<double>(j.transpose() * j) + p + 1e-9 * identity;
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(h);
+  std::vector<Var> wanted;
+  if (!window_.back().fixed) wanted.push_back({Var::kPose, window_.back().step});
+  wanted.push_back({Var::kCorrection, 0});
+  std::map<std::uint32_t, Var> newest_mover;
+  for (const Var& v : vars) {
+    if (v.kind == Var::kLandmark) wanted.push_back(v);
+    if (v.kind == Var::kMover) newest_mover[MoverTrack(v.key)] = v;  // keys ascend by step
+  }
+  for (const auto& [track, v] : newest_mover) wanted.push_back(v);
+  int rhs = 0;
+  for (const Var& v : wanted) rhs += Dim(v);
+  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, rhs);
+  for (int k = 0, o = 0; k < static_cast<int>(wanted.size()); o += Dim(wanted[k]), ++k) {
+    e.block(layout.Col(wanted[k]), o, Dim(wanted[k]), Dim(wanted[k])).setIdentity();
+  }
+  const Eigen::MatrixXd x = information.solve(e);
+  landmark_cov_.clear();
+  mover_cov_.clear();
+  if (information.info() != Eigen::Success || !x.allFinite()) return;
+  auto block = [&](const Var& a, int o, int dim) { return x.block(layout.Col(a), o, dim, dim); };
+  pose_correction_cov_.setZero();
+  int o = 0;
+  if (!window_.back().fixed) {
+    const int pc = layout.Col({Var::kPose, window_.back().step});
+    const int cc = layout.Col({Var::kCorrection, 0});
+    pose_correction_cov_.topLeftCorner<3, 3>() = x.block(pc, 0, 3, 3);
+    pose_correction_cov_.topRightCorner<3, 3>() = x.block(pc, 3, 3, 3);
+    pose_correction_cov_.bottomLeftCorner<3, 3>() = x.block(cc, 0, 3, 3);
+    pose_correction_cov_.bottomRightCorner<3, 3>() = x.block(cc, 3, 3, 3);
+    o = 6;
+  } else {
+    pose_correction_cov_.bottomRightCorner<3, 3>() = block({Var::kCorrection, 0}, 0, 3);
+    o = 3;
+  }
+  for (const Var& v : wanted) {
+    if (v.kind == Var::kLandmark) landmark_cov_[static_cast<std::uint32_t>(v.key)] = block(v, o, 2);
+    if (v.kind == Var::kMover) mover_cov_[v.key] = block(v, o, 3);
+    if (v.kind == Var::kLandmark || v.kind == Var::kMover) o += Dim(v);
+  }
+}
+
+Pose2 KeyframeGraph::Pose() const { return common::Compose(window_.back().pose, Increment(pending_, correction_)); }
+
+Eigen::Matrix3d KeyframeGraph::PoseCovariance() const {
+  const Pose2& kf = window_.back().pose;
+  const Pose2 delta = Increment(pending_, correction_);
+  Eigen::Matrix<double, 3, 6> j;
+  j.leftCols<3>() = common::ComposeJacobianLeft(kf, delta);
+  j.rightCols<3>() = common::ComposeJacobianRight(kf, delta) * IncrementJacobian(pending_);
+  const Eigen::Matrix3d rot = common::ComposeJacobianRight(kf, delta);
+  Eigen::Matrix3d cov = j * pose_correction_cov_ * j.transpose();
+  if (!pending_.empty()) cov += rot * AccumulatedCovariance(pending_) * rot.transpose();
+  return 0.5 * (cov + cov.transpose());
+}
+
+std::vector<KeyframeGraph::Landmark> KeyframeGraph::Landmarks() const {
+  std::vector<Landmark> out;
+  for (const auto& [track, cov] : landmark_cov_) out.push_back({track, landmarks_.at(track), cov});
+  return out;
+}
+
+std::vector<KeyframeGraph::Mover> KeyframeGraph::Movers() const {
+  std::vector<Mover> out;
+  for (const auto& [key, cov] : mover_cov_) {
+    if (moving_tracks_.count(MoverTrack(key)) > 0)
+      out.push_back({MoverTrack(key), movers_.at(key), cov, MoverStep(key)});
+  }
+  return out;
+}
+
+KeyframeGraph::Prediction KeyframeGraph::PredictMover(const Mover& mover, int step) const {
+  const int n = std::max(0, step - mover.step);
+  const MoverModel& model = mover_models_.at(mover.track);
+  const Pose2 delta = MoverIncrement(model, n);
+  const Eigen::Matrix3d f = common::ComposeJacobianLeft(mover.state, delta);
+  const Eigen::Matrix3d rot = common::ComposeJacobianRight(mover.state, delta);
+  Eigen::Matrix3d cov = f * mover.covariance * f.transpose();
+  if (n > 0) cov += rot * Accumulate(std::vector<Pose2>(n, MoverIncrement(model, 1)), landmark_var_) * rot.transpose();
+  return {common::Compose(mover.state, delta), 0.5 * (cov + cov.transpose())};
+}
+
+std::vector<std::pair<int, Pose2>> KeyframeGraph::Path() const {
+  std::vector<std::pair<int, Pose2>> out = history_;
+  for (const auto& kf : window_) out.emplace_back(kf.step, kf.pose);
+  return out;
+}
+
+std::vector<std::pair<KeyframeGraph::Reading, bool>> KeyframeGraph::NewestReadings() const {
+  std::vector<std::pair<Reading, bool>> out;
+  for (const auto& r : window_.back().readings) out.emplace_back(r.z, r.inlier);
+  return out;
+}
+
+}  // namespace mrslam::robot_agent::smoother

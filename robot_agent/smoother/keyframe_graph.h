@@ -1,0 +1,234 @@
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <set>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "common/se2.h"
+#include "robot_agent/filters/odometry_calibration.h"
+#include "robot_agent/options/agent_options.h"
+
+namespace mrslam::robot_agent::smoother {
+
+// A fixed-lag smoother of one robot's keyframe poses, its static landmarks and its odometry
+// calibration, in the robot's own frame (docs/smoother.md). Pure; not thread-safe.
+//
+// Unknowns: the poses x_k of the keyframes in the window (the first keyframe of the run is the
+// known start pose), each static landmark's position p_j (by track id), and the odometry
+// correction c = (s_v, s_w, b_w): the robot moves at (s_v v, s_w w + b_w) for the calibrated
+// odometry's (v, w). Factors, each a whitened residual:
+// * odometry between consecutive keyframes a, b: e = Between(x_a, x_b) - Delta(c), heading
+//   wrapped, Delta the composition of the unicycle steps of the corrected odometry segments of
+//   the steps in between; covariance Sigma accumulated over those steps,
+//   Sigma_i = J Sigma_{i-1} J^T + Q (J = d Compose(Delta_{i-1}, delta_i) / d Delta_{i-1}, Q the
+//   per-step noise.robot_process_var taken in the keyframe's frame, exact when its x and y
+//   variances are equal), r = L^-1 e with Sigma = L L^T;
+// * a reading (range, bearing) of landmark j at keyframe k: r = W (z - h(x_k, p_j)), bearing
+//   wrapped, W = diag(1/sd_r, 1/sd_b), under a Huber loss of width huber_k (iteratively
+//   reweighted: a block of whitened norm s > k is scaled by sqrt(k / s)); a reading whose s^2
+//   exceeds the chi-square 2 dof quantile of reading_gate_probability at the solution is left
+//   out, and taken back when it falls within again (re-decided at every solve);
+// * a moving landmark (a track the caller names with its unicycle (v, w)) has a state
+//   (x, y, heading) at every keyframe from its first reading in the window to its last; between
+//   consecutive states a and b, e = Between(s_a, s_b) - Delta, Delta the n steps of the unicycle
+//   with (v, w), covariance accumulated as the odometry's from noise.landmark_process_var; its
+//   readings are factors on the position of the state at their keyframe; a chain's first state
+//   has a weak prior (sd 1000 rad) on the heading it starts with (from the caller), so that it
+//   is defined before the motion makes it observable;
+// * the prior left by marginalization, 0.5-free quadratic form
+//   (x - x0)^T H_p (x - x0) + 2 g_p^T (x - x0) over the variables it names, x0 the values at
+//   marginalization (heading differences wrapped); it starts as the calibration prior
+//   N((1, 1, 0), diag(calibration_prior_sd^2)).
+// Solve: Levenberg-Marquardt on the sparse normal equations (J^T J + H_p), warm-started, then
+// the gate re-decided and solved again while the set of outliers changes (at most 3 rounds).
+// When the window holds more than window_keyframes keyframes, the oldest is marginalized: the
+// factors touching it and the prior are linearized at the current estimate into H, g over the
+// variables involved, and the oldest pose eliminated by the Schur complement
+// H' = H_rr - H_rm H_mm^-1 H_mr, g' = g_r - H_rm H_mm^-1 g_m (m: the oldest pose and the moving
+// landmarks' states at it); its readings and odometry leave the window and its pose joins the
+// fixed history (Path).
+// Marginal covariances are blocks of (J^T J + H_p)^-1 at the solution (Laplace approximation).
+class KeyframeGraph {
+ public:
+  using Motion = filters::OdometryCalibration::Motion;
+  struct Reading {
+    std::uint32_t track = 0;
+    double range_m = 0.0, bearing_rad = 0.0;
+  };
+  struct Landmark {
+    std::uint32_t track = 0;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+  };
+  // A moving landmark's unicycle kinematics and its heading when its track starts.
+  struct MoverModel {
+    double v_mps = 0.0, w_radps = 0.0;
+    double start_heading = 0.0;
+  };
+  struct Mover {
+    std::uint32_t track = 0;
+    common::Pose2 state;  // at the newest keyframe with a state
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+    int step = 0;  // of that keyframe
+  };
+
+  KeyframeGraph(const AgentOptions& options, const common::Pose2& start);
+
+  // One step's calibrated odometry segments, pending until the next keyframe.
+  void AddMotion(const std::vector<Motion>& segments);
+  // A keyframe at `step` from the pending motion, with its readings; the pose starts at the
+  // odometry's prediction. Marginalizes the oldest keyframe when the window is full.
+  void AddKeyframe(int step, const std::vector<Reading>& readings);
+  // The tracks whose readings are factors: static landmarks, and moving ones with their models;
+  // the others' readings wait.
+  void SetTracks(std::set<std::uint32_t> static_tracks, const std::map<std::uint32_t, MoverModel>& movers) {
+    static_tracks_ = std::move(static_tracks);
+    moving_tracks_.clear();
+    for (const auto& [track, model] : movers) {
+      mover_models_[track] = model;
+      moving_tracks_.insert(track);
+    }
+    DropStoppedChains();
+  }
+  // Replaces the track of every reading labelled `from` by `to` in the keyframes from
+  // `from_step` on (a re-association).
+  void Relabel(int from_step, const std::map<std::uint32_t, std::uint32_t>& from_to);
+  // Moves the keyframes from the one at `from_step` on by the rigid transform `correction`
+  // (applied on the left) and cuts the odometry factor into that keyframe: the robot was moved
+  // in a way its odometry did not see.
+  void CutAndMove(int from_step, const common::Pose2& correction);
+  void Solve();
+
+  // The newest pose (the last keyframe's composed with the pending motion) and its marginal
+  // covariance, the correction's uncertainty included.
+  common::Pose2 Pose() const;
+  Eigen::Matrix3d PoseCovariance() const;
+  int KeyframeStep() const { return window_.back().step; }
+  const common::Pose2& KeyframePose() const { return window_.back().pose; }
+  std::vector<Landmark> Landmarks() const;
+  // Each moving landmark's newest state in the window.
+  std::vector<Mover> Movers() const;
+  // A mover's state predicted by its model to `step`, with the covariance grown by the model's
+  // noise: F P F^T + Sigma_n over the n steps.
+  struct Prediction {
+    common::Pose2 state;
+    Eigen::Matrix3d covariance;
+  };
+  Prediction PredictMover(const Mover& mover, int step) const;
+  const Eigen::Vector3d& Correction() const { return correction_; }
+  // Every keyframe's step and pose, the marginalized ones as they were when they left.
+  std::vector<std::pair<int, common::Pose2>> Path() const;
+  // The readings of the newest keyframe and whether each is within the gate at the solution.
+  std::vector<std::pair<Reading, bool>> NewestReadings() const;
+  int WindowSize() const { return static_cast<int>(window_.size()); }
+
+ private:
+  struct StoredReading {
+    Reading z;
+    bool inlier = true;
+  };
+  struct Keyframe {
+    int step = 0;
+    common::Pose2 pose;
+    bool fixed = false;                      // the run's first pose
+    bool has_odometry = false;               // a factor from the previous keyframe
+    std::vector<std::vector<Motion>> steps;  // the odometry since the previous keyframe, per step
+    Eigen::Matrix3d odometry_whitening = Eigen::Matrix3d::Identity();  // L^-1
+    std::vector<StoredReading> readings;
+  };
+  // A variable: a keyframe pose (by step), a landmark (by track) or the correction.
+  struct Var {
+    enum Kind : std::uint8_t { kPose, kLandmark, kMover, kCorrection } kind = kPose;
+    std::int64_t key = 0;  // a pose's step, a landmark's track, MoverKey for a mover's state
+    bool operator<(const Var& o) const { return kind != o.kind ? kind < o.kind : key < o.key; }
+    bool operator==(const Var& o) const { return kind == o.kind && key == o.key; }
+  };
+  struct Prior {
+    std::vector<Var> vars;
+    std::vector<Eigen::VectorXd> x0;
+    Eigen::MatrixXd h;
+    Eigen::VectorXd g;
+  };
+  struct Layout {
+    std::map<Var, int> col;
+    int cols = 0;
+    int Col(const Var& v) const {
+      const auto it = col.find(v);
+      return it == col.end() ? -1 : it->second;
+    }
+  };
+  struct Rows;
+  static std::int64_t MoverKey(std::uint32_t track, int step) {
+    return (static_cast<std::int64_t>(track) << 32) | static_cast<std::uint32_t>(step);
+  }
+  static std::uint32_t MoverTrack(std::int64_t key) { return static_cast<std::uint32_t>(key >> 32); }
+  static int MoverStep(std::int64_t key) { return static_cast<int>(key & 0xffffffff); }
+
+  common::Pose2 Increment(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction) const;
+  Eigen::Matrix<double, 3, 3> IncrementJacobian(const std::vector<std::vector<Motion>>& steps) const;
+  Eigen::Matrix3d AccumulatedCovariance(const std::vector<std::vector<Motion>>& steps) const;
+  static int Dim(const Var& v) { return v.kind == Var::kLandmark ? 2 : 3; }
+  common::Pose2 MoverIncrement(const MoverModel& model, int steps) const;
+  Eigen::Matrix3d MoverWhitening(const MoverModel& model, int steps) const;
+  bool MoverReading(const StoredReading& r, int step) const {
+    return r.inlier && moving_tracks_.count(r.z.track) > 0 && movers_.count(MoverKey(r.z.track, step)) > 0;
+  }
+  // The mover states of one track, by step.
+  std::vector<int> ChainSteps(std::uint32_t track) const;
+  void StartMovers();
+  // Removes the states of tracks no longer moving that the prior does not hold.
+  void DropStoppedChains();
+  Eigen::VectorXd Value(const Var& v) const;
+  void SetValue(const Var& v, const Eigen::VectorXd& value);
+  Eigen::VectorXd Difference(const Var& v, const Eigen::VectorXd& x0) const;  // x - x0, wrapped
+  const Keyframe* FindKeyframe(int step) const;
+  Keyframe* FindKeyframe(int step);
+  bool Active(const StoredReading& r) const { return r.inlier && static_tracks_.count(r.z.track) > 0; }
+  // The variables of the whole window (or, only_oldest, of the oldest keyframe's factors and
+  // the prior), in order.
+  std::vector<Var> Variables(bool only_oldest) const;
+  Layout MakeLayout(const std::vector<Var>& vars) const;
+  void StartLandmarks();
+  // The whitened rows of the factors (only_oldest: those touching the oldest keyframe).
+  void BuildRows(const Layout& layout, bool only_oldest, Rows* rows) const;
+  void AddOdometryRows(const Layout& layout, const Keyframe& previous, const Keyframe& kf, Rows* rows) const;
+  void AddReadingRows(const Layout& layout, const Keyframe& kf, Rows* rows) const;
+  void AddMoverRows(const Layout& layout, std::uint32_t track, int from_step, int to_step, Rows* rows) const;
+  Eigen::Vector2d WhitenedResidual(const common::Pose2& x, const Eigen::Vector2d& p, const Reading& z) const;
+  // The prior's terms: H_p (as triplets at the layout's columns), its gradient at the current
+  // values, and its cost.
+  void AddPrior(const Layout& layout, std::vector<Eigen::Triplet<double>>* h, Eigen::VectorXd* g, double* cost) const;
+  double SolveOnce();
+  bool UpdateInliers();
+  void Marginalize();
+  void ComputeCovariances();
+
+  double dt_s_;
+  int window_keyframes_;
+  double huber_k_, gate_;
+  Eigen::Vector3d robot_var_, landmark_var_;
+  Eigen::Vector2d z_w_;
+  std::deque<Keyframe> window_;
+  std::vector<std::pair<int, common::Pose2>> history_;  // marginalized keyframes
+  std::vector<std::vector<Motion>> pending_;            // the motion since the last keyframe
+  std::map<std::uint32_t, Eigen::Vector2d> landmarks_;
+  std::set<std::uint32_t> static_tracks_;
+  std::map<std::uint32_t, MoverModel> mover_models_;  // the last model of every track once moving
+  std::set<std::uint32_t> moving_tracks_;             // moving now
+  std::map<std::int64_t, common::Pose2> movers_;      // moving landmarks' states, by MoverKey
+  std::map<std::int64_t, double> chain_starts_;       // states under the weak heading prior: its mean
+  Eigen::Vector3d correction_{1.0, 1.0, 0.0};
+  Prior prior_;
+  // At the last solution: the joint covariance of the newest keyframe pose and the correction,
+  // and each landmark's.
+  Eigen::Matrix<double, 6, 6> pose_correction_cov_ = Eigen::Matrix<double, 6, 6>::Zero();
+  std::map<std::uint32_t, Eigen::Matrix2d> landmark_cov_;
+  std::map<std::int64_t, Eigen::Matrix3d> mover_cov_;  // of each chain's newest state
+};
+
+}  // namespace mrslam::robot_agent::smoother

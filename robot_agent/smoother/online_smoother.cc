@@ -1,0 +1,247 @@
+#include "robot_agent/smoother/online_smoother.h"
+
+#include <cmath>
+#include <map>
+#include <set>
+#include <utility>
+
+#include "common/angles.h"
+#include "common/gaussian.h"
+#include "common/se2.h"
+#include "robot_agent/filters/fastslam.h"
+
+namespace mrslam::robot_agent::smoother {
+namespace {
+
+using common::Pose2;
+using filters::FilterEstimate;
+using filters::kUnknownHeadingVar;
+using filters::MapLandmark;
+
+AgentOptions FrontEndOptions(AgentOptions options) {
+  options.filter.particles = options.filter.smoother.front_end_particles;
+  return options;
+}
+
+// The pose that puts reading points qa, qb (robot frame) on landmarks pa, pb.
+Pose2 PoseFromPairs(const Eigen::Vector2d& qa, const Eigen::Vector2d& qb, const Eigen::Vector2d& pa,
+                    const Eigen::Vector2d& pb) {
+  const Eigen::Vector2d dq = qb - qa, dp = pb - pa;
+  const double heading = common::WrapAngle(std::atan2(dp.y(), dp.x()) - std::atan2(dq.y(), dq.x()));
+  const double c = std::cos(heading), s = std::sin(heading);
+  const Eigen::Vector2d t = pa - Eigen::Vector2d(c * qa.x() - s * qa.y(), s * qa.x() + c * qa.y());
+  return {t.x(), t.y(), heading};
+}
+
+}  // namespace
+
+OnlineSmoother::OnlineSmoother(const AgentOptions& options, std::uint64_t seed)
+    : options_(options),
+      front_end_(filters::CreateFastSlam(FrontEndOptions(options), seed)),
+      calibration_(options.filter),
+      graph_(options, options.initial_pose) {
+  front_ = front_end_->Estimate();
+}
+
+std::vector<KeyframeGraph::Reading> OnlineSmoother::LabelledReadings(const common::SensorStep& step,
+                                                                     const FilterEstimate& front) const {
+  std::vector<KeyframeGraph::Reading> out;
+  const auto& scan = step.lidar.landmarks;
+  for (std::size_t i = 0; i < scan.size() && i < front.detection_tracks.size(); ++i) {
+    if (front.detection_tracks[i] != 0)
+      out.push_back({front.detection_tracks[i], scan[i].range_m, scan[i].bearing_rad});
+  }
+  return out;
+}
+
+void OnlineSmoother::UpdateTracks(const FilterEstimate& front) {
+  std::set<std::uint32_t> fixed;
+  std::map<std::uint32_t, KeyframeGraph::MoverModel> movers;
+  const Pose2 shift = common::Compose(graph_.Pose(), common::Inverse(front.pose));
+  std::set<std::uint32_t> mapped;
+  for (const auto& l : graph_.Landmarks()) mapped.insert(l.track);
+  for (const MapLandmark& l : front.landmarks) {
+    // While the readings do not fit the map, new landmarks wait: they could be the old ones seen
+    // from a pose gone wrong.
+    if (l.tentative || (lost_keyframes_ > 0 && mapped.count(l.track_id) == 0)) continue;
+    if (l.motion == filters::LandmarkMotionKind::kStatic) {
+      fixed.insert(l.track_id);
+    } else if (l.covariance(2, 2) < kUnknownHeadingVar) {
+      movers[l.track_id] = {l.v_mps, l.w_radps, common::WrapAngle(l.mean(2) + shift.heading)};
+    }
+  }
+  graph_.SetTracks(std::move(fixed), movers);
+}
+
+void OnlineSmoother::Process(const common::SensorStep& step) {
+  step_ = static_cast<int>(step.lidar.stamp.step);
+  front_end_->Process(step);
+  front_ = front_end_->Estimate();
+  graph_.AddMotion(calibration_.Step(step.odometry, step.lidar.stamp.time_s, options_.dt_s));
+  std::vector<KeyframeGraph::Reading> readings = LabelledReadings(step, front_);
+  ++since_keyframe_;
+  if (readings.empty() && since_keyframe_ < options_.filter.smoother.max_keyframe_gap_steps) return;
+  since_keyframe_ = 0;
+  UpdateTracks(front_);
+  graph_.AddKeyframe(step_, readings);
+  graph_.Solve();
+  CheckLost(step_);
+}
+
+OnlineSmoother::Support OnlineSmoother::Explain(const Pose2& x) const {
+  const auto& lidar = options_.sensors.lidar;
+  const double gate = common::ChiSquare2Quantile(options_.filter.smoother.reading_gate_probability);
+  Support out;
+  std::set<std::uint32_t> seen;
+  for (const auto& [z, inlier] : graph_.NewestReadings()) {
+    double best = gate;
+    std::uint32_t track = 0;
+    for (const auto& l : graph_.Landmarks()) {
+      const common::RangeBearing h = common::MeasureRangeBearing(x, l.mean);
+      const double dr = (z.range_m - h.range_m) / lidar.range_noise_sd_m;
+      const double db = common::WrapAngle(z.bearing_rad - h.bearing_rad) / lidar.bearing_noise_sd_rad;
+      if (dr * dr + db * db <= best) {
+        best = dr * dr + db * db;
+        track = l.track;
+      }
+    }
+    if (track == 0) continue;
+    ++out.fit;
+    out.labels[z.track] = track;
+    seen.insert(track);
+  }
+  for (const auto& l : graph_.Landmarks()) {
+    const common::RangeBearing h = common::MeasureRangeBearing(x, l.mean);
+    if (h.range_m < 0.9 * lidar.max_range_m && h.range_m > lidar.min_range_m &&
+        std::abs(h.bearing_rad) < 0.45 * lidar.fov_rad) {
+      ++out.in_view;
+      out.seen += seen.count(l.track) > 0 ? 1 : 0;
+    }
+  }
+  return out;
+}
+
+void OnlineSmoother::CheckLost(int step) {
+  const auto& o = options_.filter.smoother;
+  const int readings = static_cast<int>(graph_.NewestReadings().size());
+  const Support now = Explain(graph_.KeyframePose());
+  // Suspect: most readings fit no mapped landmark, and most mapped landmarks in view explain no
+  // reading (a robot that moved unseen, not one that explores).
+  if (readings < o.min_recovery_readings || 2 * now.fit > readings || now.in_view < 2 || 2 * now.seen > now.in_view) {
+    lost_keyframes_ = 0;
+    lost_since_step_ = -1;
+    return;
+  }
+  if (lost_keyframes_++ == 0) lost_since_step_ = step;
+  if (lost_keyframes_ >= o.lost_after_keyframes) {
+    // Found again or not, the held landmarks are let in.
+    recoveries_ += Recover(now) ? 1 : 0;
+    lost_keyframes_ = 0;
+    lost_since_step_ = -1;
+  }
+}
+
+bool OnlineSmoother::Recover(const Support& now) {
+  const auto readings = graph_.NewestReadings();
+  const auto landmarks = graph_.Landmarks();
+  const auto& lidar = options_.sensors.lidar;
+  std::vector<Eigen::Vector2d> points;
+  points.reserve(readings.size());
+  for (const auto& [z, inlier] : readings)
+    points.push_back(common::PointFromRangeBearing({}, {z.range_m, z.bearing_rad}));
+  Support best = now;
+  Pose2 best_pose;
+  const double tolerance = 6.0 * lidar.range_noise_sd_m + 0.05;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (std::size_t j = i + 1; j < points.size(); ++j) {
+      const double dq = (points[j] - points[i]).norm();
+      for (const auto& a : landmarks) {
+        for (const auto& b : landmarks) {
+          if (a.track == b.track || std::abs((b.mean - a.mean).norm() - dq) > tolerance + 0.05 * dq) continue;
+          const Pose2 x = PoseFromPairs(points[i], points[j], a.mean, b.mean);
+          const Support candidate = Explain(x);
+          if (candidate.fit > best.fit) {
+            best = candidate;
+            best_pose = x;
+          }
+        }
+      }
+    }
+  }
+  const int n = static_cast<int>(readings.size());
+  if (best.fit < std::max(options_.filter.smoother.min_recovery_readings, now.fit + 2) || 2 * best.fit <= n)
+    return false;
+  const Pose2 correction = common::Compose(best_pose, common::Inverse(graph_.KeyframePose()));
+  graph_.CutAndMove(lost_since_step_, correction);
+  graph_.Relabel(lost_since_step_, best.labels);
+  graph_.Solve();
+  const Pose2 front_correction = common::Compose(graph_.KeyframePose(), common::Inverse(front_.pose));
+  front_end_->Reseat(common::Compose(front_correction, front_.pose), graph_.PoseCovariance());
+  front_ = front_end_->Estimate();
+  return true;
+}
+
+FilterEstimate OnlineSmoother::Estimate() const {
+  FilterEstimate out;
+  out.step = front_.step;
+  out.time_s = front_.time_s;
+  out.pose = graph_.Pose();
+  out.covariance = graph_.PoseCovariance();
+  out.effective_sample_size = front_.effective_sample_size;
+  out.particles = front_.particles;
+  out.labels_detections = true;
+  out.detection_tracks = front_.detection_tracks;
+  std::map<std::uint32_t, const MapLandmark*> front_by_track;
+  for (const MapLandmark& l : front_.landmarks) front_by_track[l.track_id] = &l;
+  std::set<std::uint32_t> in_graph;
+  for (const auto& l : graph_.Landmarks()) {
+    MapLandmark m;
+    const auto it = front_by_track.find(l.track);
+    if (it != front_by_track.end()) m = *it->second;
+    m.track_id = l.track;
+    m.mean << l.mean, 0.0;
+    m.covariance.setZero();
+    m.covariance.topLeftCorner<2, 2>() = l.covariance;
+    m.covariance(2, 2) = kUnknownHeadingVar;
+    m.motion = filters::LandmarkMotionKind::kStatic;
+    m.moving = false;
+    m.tentative = false;
+    if (m.origin_robot < 0) m.origin_robot = options_.TeamIndex(options_.robot_id);
+    if (m.origin_track == 0) m.origin_track = l.track;
+    in_graph.insert(l.track);
+    out.landmarks.push_back(m);
+  }
+  for (const auto& l : graph_.Movers()) {
+    MapLandmark m;
+    const auto it = front_by_track.find(l.track);
+    if (it != front_by_track.end()) m = *it->second;
+    const KeyframeGraph::Prediction p = graph_.PredictMover(l, static_cast<int>(out.step));
+    m.track_id = l.track;
+    m.mean = p.state.Vector();
+    m.covariance = p.covariance;
+    in_graph.insert(l.track);
+    out.landmarks.push_back(m);
+  }
+  // The front end's other landmarks (moving, or not yet in the graph), re-anchored: where the
+  // front end sees them from its pose, seen from the graph's.
+  const Pose2 shift = common::Compose(out.pose, common::Inverse(front_.pose));
+  const Eigen::Matrix2d rot = common::ComposeJacobianRight(shift, {}).topLeftCorner<2, 2>();
+  for (const MapLandmark& l : front_.landmarks) {
+    if (in_graph.count(l.track_id) > 0) continue;
+    MapLandmark m = l;
+    const Pose2 moved = common::Compose(shift, Pose2::FromVector(l.mean));
+    m.mean = moved.Vector();
+    m.covariance.topLeftCorner<2, 2>() = rot * l.covariance.topLeftCorner<2, 2>() * rot.transpose();
+    m.covariance.block<2, 1>(0, 2) = rot * l.covariance.block<2, 1>(0, 2);
+    m.covariance.block<1, 2>(2, 0) = m.covariance.block<2, 1>(0, 2).transpose();
+    out.landmarks.push_back(m);
+  }
+  return out;
+}
+
+int OnlineSmoother::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
+                                   double gate_probability, double too_close_m) {
+  return front_end_->MergeLandmarks(landmarks_in_own_frame, rule, gate_probability, too_close_m);
+}
+
+}  // namespace mrslam::robot_agent::smoother

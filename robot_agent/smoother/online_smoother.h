@@ -1,0 +1,78 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "robot_agent/filters/odometry_calibration.h"
+#include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/options/agent_options.h"
+#include "robot_agent/smoother/keyframe_graph.h"
+
+namespace mrslam::robot_agent::smoother {
+
+// filter.type smoother (docs/smoother.md): the maximum a posteriori estimate of the robot's
+// recent path, its static landmarks and its odometry calibration (KeyframeGraph), with a
+// FastSLAM front end of filter.smoother.front_end_particles particles that
+// * labels every reading with a track (its most probable particle's association), so a wrong
+//   association is a wrong label that the graph's Huber loss and gate bound and that is
+//   re-decided at every solve;
+// * tells static landmarks from moving ones: a track enters the graph once the front end maps it
+//   as confirmed and static; a moving track is reported from the front end, re-anchored on the
+//   graph's pose (its position relative to the front end's pose, placed relative to the graph's);
+// * receives peers' maps (MergeLandmarks), which inform its association.
+// A keyframe is made at every step with landmark readings and at least every
+// max_keyframe_gap_steps steps. Each step reports the newest pose with its marginal covariance
+// (the correction's uncertainty included) and the landmarks with theirs.
+// Lost: when lost_after_keyframes keyframes in a row each have at least min_recovery_readings
+// readings of which at most half fit the map (within the gate at the solution), the newest
+// keyframe's pose is searched again: every pair of its readings is paired with every pair of
+// mapped static landmarks at a consistent distance, the pose that explains both is scored by
+// how many readings fall within the gate of some mapped landmark, and the best (more than half of
+// the readings, and more than at the current pose) is taken: the keyframes since the trouble
+// began are moved by it, the odometry factor into the first of them is cut (the robot moved in a
+// way its odometry did not see), their readings are relabelled by the pose's associations, and
+// the front end is reseated there.
+class OnlineSmoother : public filters::SlamFilter {
+ public:
+  OnlineSmoother(const AgentOptions& options, std::uint64_t seed);
+
+  void Process(const common::SensorStep& step) override;
+  filters::FilterEstimate Estimate() const override;
+  int MergeLandmarks(const std::vector<filters::MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
+                     double gate_probability, double too_close_m) override;
+
+  const KeyframeGraph& Graph() const { return graph_; }
+  // Times the pose was searched again and a better one found.
+  int Recoveries() const { return recoveries_; }
+
+ private:
+  std::vector<KeyframeGraph::Reading> LabelledReadings(const common::SensorStep& step,
+                                                       const filters::FilterEstimate& front) const;
+  void UpdateTracks(const filters::FilterEstimate& front);
+  // How well pose x explains the newest keyframe's readings by the static map: readings within
+  // the gate of a mapped landmark (with the landmark each is relabelled to), mapped landmarks
+  // well inside the view (within 0.9 of the range, 0.45 of the field of view) and how many of
+  // those a reading explains.
+  struct Support {
+    int fit = 0, in_view = 0, seen = 0;
+    std::map<std::uint32_t, std::uint32_t> labels;
+  };
+  Support Explain(const common::Pose2& x) const;
+  void CheckLost(int step);
+  bool Recover(const Support& now);
+
+  AgentOptions options_;
+  std::unique_ptr<filters::SlamFilter> front_end_;
+  filters::OdometryCalibration calibration_;
+  KeyframeGraph graph_;
+  filters::FilterEstimate front_;  // the front end's estimate of the last step
+  int step_ = 0;
+  int since_keyframe_ = 0;
+  int lost_keyframes_ = 0;
+  int lost_since_step_ = -1;  // the first keyframe of the current run of misfits
+  int recoveries_ = 0;
+};
+
+}  // namespace mrslam::robot_agent::smoother

@@ -1,0 +1,80 @@
+#include "robot_agent/smoother/online_smoother.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <Eigen/Cholesky>
+
+#include "common/angles.h"
+#include "common/config/agent_options_projection.h"
+#include "common/config/scenario_options.h"
+#include "common/se2.h"
+#include "world_sim/source/step_source_factory.h"
+
+namespace mrslam::robot_agent::smoother {
+namespace {
+
+std::string Config(const std::string& name) { return std::string(MRSLAM_TEST_SOURCE_DIR) + "/config/" + name; }
+
+// Runs robot r1 of the scenario alone with the online smoother; returns its pose error (own
+// frame) and pose NEES at every step.
+struct Errors {
+  std::vector<double> position_m, heading_rad, nees;
+  int recoveries = 0;
+};
+Errors RunR1(const common::ScenarioOptions& o) {
+  const auto source = world_sim::MakeStepSource(o);
+  const common::Pose2 frame = source->Truth().frames.at(0).second;
+  OnlineSmoother smoother(common::AgentOptionsFor(o, "r1"), o.seed);
+  Errors e;
+  for (int k = 0; k < o.run.steps; ++k) {
+    smoother.Process(source->Step().at(0));
+    const common::Pose2 truth = common::Compose(common::Inverse(frame), source->Truth().robots[0].pose);
+    const auto estimate = smoother.Estimate();
+    Eigen::Vector3d d = estimate.pose.Vector() - truth.Vector();
+    d(2) = common::WrapAngle(d(2));
+    e.position_m.push_back(d.head<2>().norm());
+    e.heading_rad.push_back(std::abs(d(2)));
+    e.nees.push_back(d.dot(estimate.covariance.ldlt().solve(d)));
+  }
+  e.recoveries = smoother.Recoveries();
+  return e;
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+TEST(OnlineSmoother, PoseNeesIsConsistentOverSeeds) {
+  // paper_two_robots, r1 alone, seeds 1..8: the median over seeds of the run's mean pose NEES
+  // (3 dof: 3 is ideal).
+  std::vector<double> means;
+  for (int seed = 1; seed <= 8; ++seed) {
+    const auto o = common::LoadScenario(Config("paper_two_robots.yaml"), {"seed=" + std::to_string(seed)});
+    const Errors e = RunR1(o);
+    double sum = 0.0;
+    for (const double n : e.nees) sum += n;
+    means.push_back(sum / static_cast<double>(e.nees.size()));
+  }
+  EXPECT_GT(Median(means), 1.5);
+  EXPECT_LT(Median(means), 6.0);
+}
+
+TEST(OnlineSmoother, FindsItsPoseAgainAfterASlip) {
+  // r1 slides 1 m and turns 45 degrees at step 83 while its odometry reads nothing.
+  const auto o = common::LoadScenario(Config("slip.yaml"), {"filter.type=smoother"});
+  const Errors e = RunR1(o);
+  EXPECT_GE(e.recoveries, 1);
+  // Lost at first (steps 83..87 are entries 82..86).
+  EXPECT_GT(*std::max_element(e.heading_rad.begin() + 82, e.heading_rad.begin() + 87), common::RadFromDeg(20.0));
+  EXPECT_LT(e.position_m.back(), 0.3);
+  EXPECT_LT(e.heading_rad.back(), common::RadFromDeg(5.0));
+}
+
+}  // namespace
+}  // namespace mrslam::robot_agent::smoother
