@@ -361,6 +361,7 @@ void ParseSmoother(Section& filter, robot_agent::SmootherOptions* d) {
   d->window_keyframes = s.Get("window_keyframes", d->window_keyframes);
   d->max_keyframe_gap_steps = s.Get("max_keyframe_gap_steps", d->max_keyframe_gap_steps);
   d->front_end_particles = s.Get("front_end_particles", d->front_end_particles);
+  d->max_iterations = s.Get("max_iterations", d->max_iterations);
   d->huber_k = s.Get("huber_k", d->huber_k);
   d->reading_gate_probability = s.Get("reading_gate_probability", d->reading_gate_probability);
   d->speed_factor_sd = s.Get("speed_factor_sd", d->speed_factor_sd);
@@ -368,6 +369,7 @@ void ParseSmoother(Section& filter, robot_agent::SmootherOptions* d) {
   d->turn_bias_sd_radps = s.Get("turn_bias_sd_radps", d->turn_bias_sd_radps);
   d->lost_after_keyframes = s.Get("lost_after_keyframes", d->lost_after_keyframes);
   d->min_recovery_readings = s.Get("min_recovery_readings", d->min_recovery_readings);
+  d->max_relocation_m = s.Get("max_relocation_m", d->max_relocation_m);
   s.RejectUnknownKeys();
 }
 
@@ -679,6 +681,8 @@ void CheckSmoother(const robot_agent::SmootherOptions& s, Checker* c) {
            s.max_keyframe_gap_steps, "must be in 1..10000");
   c->Check(s.front_end_particles >= 1 && s.front_end_particles <= 100000, "filter.smoother.front_end_particles",
            s.front_end_particles, "must be in 1..100000");
+  c->Check(s.max_iterations >= 1 && s.max_iterations <= 1000, "filter.smoother.max_iterations", s.max_iterations,
+           "must be in 1..1000");
   c->Check(s.huber_k > 0.0 && std::isfinite(s.huber_k), "filter.smoother.huber_k", s.huber_k, "must be positive");
   c->Check(s.reading_gate_probability > 0.0 && s.reading_gate_probability < 1.0,
            "filter.smoother.reading_gate_probability", s.reading_gate_probability, "must be in (0, 1)");
@@ -691,6 +695,8 @@ void CheckSmoother(const robot_agent::SmootherOptions& s, Checker* c) {
            "must be at least 1");
   c->Check(s.min_recovery_readings >= 2, "filter.smoother.min_recovery_readings", s.min_recovery_readings,
            "must be at least 2");
+  c->Check(s.max_relocation_m > 0.0 && std::isfinite(s.max_relocation_m), "filter.smoother.max_relocation_m",
+           s.max_relocation_m, "must be positive");
 }
 
 // The filter.

@@ -31,6 +31,7 @@ struct SmootherOptions {
   int window_keyframes = 40;                 // keyframes kept as unknowns; older ones are marginalized
   int max_keyframe_gap_steps = 10;           // a keyframe at least this often, readings or not
   int front_end_particles = 50;              // the front end's particles
+  int max_iterations = 3;                    // Levenberg-Marquardt iterations per solve
   double huber_k = 3.0;                      // the Huber loss's width on a reading's whitened residual norm
   double reading_gate_probability = 0.9999;  // chi-square 2 dof gate of a reading at the solution
   // Prior standard deviations of the odometry correction: speed factor, turn-rate factor,
@@ -42,6 +43,7 @@ struct SmootherOptions {
   // most half fit the map; then the pose is searched again among the mapped landmarks.
   int lost_after_keyframes = 3;
   int min_recovery_readings = 3;
+  double max_relocation_m = 2.0;  // how far from the believed pose the search looks
 };
 
 struct FilterOptions {

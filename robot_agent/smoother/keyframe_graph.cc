@@ -13,7 +13,6 @@
 #include "common/angles.h"
 #include "common/gaussian.h"
 #include "robot_agent/filters/landmark_ekf.h"
-#include "robot_agent/smoother/whitened_rows.h"
 
 namespace mrslam::robot_agent::smoother {
 namespace {
@@ -40,14 +39,10 @@ BetweenJacobians BetweenWithJacobians(const Pose2& a, const Pose2& b) {
 
 }  // namespace
 
-// The rows plus the robust cost (the Huber cost of the readings, squares elsewhere).
-struct KeyframeGraph::Rows : WhitenedRows {
-  double robust_cost = 0.0;
-};
-
 KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
     : dt_s_(options.dt_s),
       window_keyframes_(std::max(2, options.filter.smoother.window_keyframes)),
+      max_iterations_(std::max(1, options.filter.smoother.max_iterations)),
       huber_k_(options.filter.smoother.huber_k),
       gate_(common::ChiSquare2Quantile(options.filter.smoother.reading_gate_probability)),
       robot_var_(options.noise.robot_process_var),
@@ -342,7 +337,8 @@ void KeyframeGraph::AddOdometryRows(const Layout& layout, const Keyframe& previo
   e(2) = WrapAngle(e(2));
   const Eigen::Matrix3d& w = kf.odometry_whitening;
   const Eigen::Vector3d r = w * e;
-  rows->robust_cost += r.squaredNorm();
+  rows->cost += r.squaredNorm();
+  if (!rows->jacobians) return;
   const int c_col = layout.Col({Var::kCorrection, 0});
   const Eigen::Matrix3d jc = c_col < 0 ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(-w * IncrementJacobian(kf.steps));
   rows->Add(r, {{previous.fixed ? -1 : layout.Col({Var::kPose, previous.step}), w * b.ja},
@@ -363,7 +359,7 @@ void KeyframeGraph::AddReadingRows(const Layout& layout, const Keyframe& kf, Row
     Eigen::Vector2d r = WhitenedResidual(kf.pose, p, stored.z);
     const double s = r.norm();
     const double scale = s > huber_k_ ? std::sqrt(huber_k_ / s) : 1.0;
-    rows->robust_cost += s > huber_k_ ? 2.0 * huber_k_ * s - huber_k_ * huber_k_ : s * s;
+    rows->cost += s > huber_k_ ? 2.0 * huber_k_ * s - huber_k_ * huber_k_ : s * s;
     r *= scale;
     const Eigen::Matrix2d w = scale * z_w_.asDiagonal();
     Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, Dim(target));
@@ -382,7 +378,7 @@ void KeyframeGraph::AddMoverRows(const Layout& layout, std::uint32_t track, int 
   e(2) = WrapAngle(e(2));
   const Eigen::Matrix3d w = MoverWhitening(model->second, to_step - from_step);
   const Eigen::Vector3d r = w * e;
-  rows->robust_cost += r.squaredNorm();
+  rows->cost += r.squaredNorm();
   rows->Add(r, {{layout.Col(a), w * between.ja}, {layout.Col(b), w * between.jb}});
 }
 
@@ -405,14 +401,13 @@ void KeyframeGraph::BuildRows(const Layout& layout, bool only_oldest, Rows* rows
       Eigen::MatrixXd j = Eigen::MatrixXd::Zero(1, 3);
       j(0, 2) = 1e-3;
       const Eigen::VectorXd r = Eigen::VectorXd::Constant(1, 1e-3 * WrapAngle(state.heading - chain_starts_.at(key)));
-      rows->robust_cost += r.squaredNorm();
+      rows->cost += r.squaredNorm();
       rows->Add(r, {{layout.Col({Var::kMover, key}), j}});
     }
   }
 }
 
-void KeyframeGraph::AddPrior(const Layout& layout, std::vector<Eigen::Triplet<double>>* h, Eigen::VectorXd* g,
-                             double* cost) const {
+void KeyframeGraph::AddPrior(const Layout& layout, Rows* rows) const {
   const int n = static_cast<int>(prior_.g.size());
   Eigen::VectorXd d(n);
   std::vector<int> cols;
@@ -422,14 +417,24 @@ void KeyframeGraph::AddPrior(const Layout& layout, std::vector<Eigen::Triplet<do
     for (int k = 0; k < Dim(prior_.vars[v]); ++k) cols.push_back(c < 0 ? -1 : c + k);
   }
   const Eigen::VectorXd hd = prior_.h * d;
-  *cost += d.dot(hd) + 2.0 * prior_.g.dot(d);
+  rows->cost += d.dot(hd) + 2.0 * prior_.g.dot(d);
+  if (!rows->jacobians) return;
   for (int i = 0; i < n; ++i) {
     if (cols[i] < 0) continue;
-    (*g)(cols[i]) += hd(i) + prior_.g(i);
+    rows->g(cols[i]) += hd(i) + prior_.g(i);
     for (int j = 0; j < n; ++j) {
-      if (cols[j] >= 0 && prior_.h(i, j) != 0.0) h->emplace_back(cols[i], cols[j], prior_.h(i, j));
+      if (cols[j] >= 0 && prior_.h(i, j) != 0.0) rows->h.emplace_back(cols[i], cols[j], prior_.h(i, j));
     }
   }
+}
+
+// The normal equations (or, without jacobians, only the cost) of every factor of the window
+// and the prior at the current values.
+KeyframeGraph::Rows KeyframeGraph::Equations(const Layout& layout, bool only_oldest, bool jacobians) const {
+  Rows rows(layout.cols, jacobians);
+  BuildRows(layout, only_oldest, &rows);
+  AddPrior(layout, &rows);
+  return rows;
 }
 
 // One Levenberg-Marquardt solve over the window; returns the final cost.
@@ -438,35 +443,16 @@ double KeyframeGraph::SolveOnce() {
   StartMovers();
   const std::vector<Var> vars = Variables(false);
   const Layout layout = MakeLayout(vars);
-  auto evaluate = [&](Eigen::SparseMatrix<double>* h, Eigen::VectorXd* g) {
-    Rows rows;
-    BuildRows(layout, false, &rows);
-    double cost = rows.robust_cost;
-    if (h == nullptr) {
-      Eigen::VectorXd unused = Eigen::VectorXd::Zero(layout.cols);
-      std::vector<Eigen::Triplet<double>> t;
-      AddPrior(layout, &t, &unused, &cost);
-      return cost;
-    }
-    const Eigen::SparseMatrix<double> j = rows.Matrix(layout.cols);
-    const Eigen::Map<const Eigen::VectorXd> r(rows.residual.data(), static_cast<int>(rows.residual.size()));
-    *g = j.transpose() * r;
-    std::vector<Eigen::Triplet<double>> t;
-    AddPrior(layout, &t, g, &cost);
-    Eigen::SparseMatrix<double> p(layout.cols, layout.cols);
-    p.setFromTriplets(t.begin(), t.end());
-    *h = Eigen::SparseMatrix<double>(j.transpose() * j) + p;
-    return cost;
-  };
   auto apply = [&](const Eigen::VectorXd& delta) {
     for (const Var& v : vars) SetValue(v, Value(v) + delta.segment(layout.Col(v), Dim(v)));
   };
   double lambda = 1e-6, cost = 0.0;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
-  for (int iteration = 0; iteration < 20; ++iteration) {
-    Eigen::SparseMatrix<double> h;
-    Eigen::VectorXd g;
-    cost = evaluate(&h, &g);
+  for (int iteration = 0; iteration < max_iterations_; ++iteration) {
+    const Rows rows = Equations(layout, false, true);
+    Eigen::SparseMatrix<double> h = rows.Matrix();
+    const Eigen::VectorXd& g = rows.g;
+    cost = rows.cost;
     const Eigen::VectorXd diag = h.diagonal();
     for (int c = 0; c < layout.cols; ++c) h.coeffRef(c, c) += lambda * std::max(diag(c), 1e-9);
     if (iteration == 0) solver.analyzePattern(h);
@@ -476,16 +462,17 @@ double KeyframeGraph::SolveOnce() {
     std::map<Var, Eigen::VectorXd> saved;
     for (const Var& v : vars) saved[v] = Value(v);
     apply(delta);
-    const double after = evaluate(nullptr, nullptr);
+    const double after = Equations(layout, false, false).cost;
     if (after > cost) {
       for (const auto& [v, x] : saved) SetValue(v, x);
       lambda *= 10.0;
       if (lambda > 1e6) break;
       continue;
     }
+    const double decrease = cost - after;
     cost = after;
     lambda = std::max(lambda / 10.0, 1e-9);
-    if (delta.cwiseAbs().maxCoeff() < 1e-7) break;
+    if (delta.cwiseAbs().maxCoeff() < 1e-7 || decrease < 1e-6 * (1.0 + cost)) break;
   }
   return cost;
 }
@@ -523,17 +510,9 @@ void KeyframeGraph::Marginalize() {
   StartMovers();
   const std::vector<Var> vars = Variables(true);
   const Layout layout = MakeLayout(vars);
-  Rows rows;
-  BuildRows(layout, true, &rows);
-  const Eigen::SparseMatrix<double> j = rows.Matrix(layout.cols);
-  const Eigen::Map<const Eigen::VectorXd> r(rows.residual.data(), static_cast<int>(rows.residual.size()));
-  Eigen::VectorXd g = j.transpose() * r;
-  std::vector<Eigen::Triplet<double>> t;
-  double unused = 0.0;
-  AddPrior(layout, &t, &g, &unused);
-  Eigen::SparseMatrix<double> p(layout.cols, layout.cols);
-  p.setFromTriplets(t.begin(), t.end());
-  const Eigen::MatrixXd h = Eigen::MatrixXd(j.transpose() * j) + Eigen::MatrixXd(p);
+  const Rows rows = Equations(layout, true, true);
+  const Eigen::MatrixXd h(rows.Matrix());
+  const Eigen::VectorXd& g = rows.g;
   const Keyframe& oldest = window_.front();
   // The oldest pose's and mover states' columns come first.
   std::size_t eliminated = 0;
@@ -569,24 +548,9 @@ void KeyframeGraph::Marginalize() {
   window_.front().has_odometry = false;
 }
 
-void KeyframeGraph::ComputeCovariances() {
-  const std::vector<Var> vars = Variables(false);
-  const Layout layout = MakeLayout(vars);
-  Rows rows;
-  BuildRows(layout, false, &rows);
-  const Eigen::SparseMatrix<double> j = rows.Matrix(layout.cols);
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(layout.cols);
-  std::vector<Eigen::Triplet<double>> t;
-  double unused = 0.0;
-  AddPrior(layout, &t, &g, &unused);
-  Eigen::SparseMatrix<double> p(layout.cols, layout.cols);
-  p.setFromTriplets(t.begin(), t.end());
-  // A variable nothing informs (a mover's state whose only reading left the gate) gets variance
-  // 1e9 instead of making the information singular.
-  Eigen::SparseMatrix<double> identity(layout.cols, layout.cols);
-  identity.setIdentity();
-  const Eigen::SparseMatrix<double> h = Eigen::SparseMatrix<double>(j.transpose() * j) + p + 1e-9 * identity;
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(h);
+// The variables whose marginals are reported: the newest pose (unless the known start), the
+// correction, every static landmark and each moving landmark's newest state.
+std::vector<KeyframeGraph::Var> KeyframeGraph::CovarianceTargets(const std::vector<Var>& vars) const {
   std::vector<Var> wanted;
   if (!window_.back().fixed) wanted.push_back({Var::kPose, window_.back().step});
   wanted.push_back({Var::kCorrection, 0});
@@ -596,35 +560,43 @@ void KeyframeGraph::ComputeCovariances() {
     if (v.kind == Var::kMover) newest_mover[MoverTrack(v.key)] = v;  // keys ascend by step
   }
   for (const auto& [track, v] : newest_mover) wanted.push_back(v);
+  return wanted;
+}
+
+void KeyframeGraph::ComputeCovariances() {
+  const std::vector<Var> vars = Variables(false);
+  const Layout layout = MakeLayout(vars);
+  // A variable nothing informs (a mover's state whose only reading left the gate) gets variance
+  // 1e9 instead of making the information singular.
+  Eigen::SparseMatrix<double> identity(layout.cols, layout.cols);
+  identity.setIdentity();
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(Equations(layout, false, true).Matrix() +
+                                                                       1e-9 * identity);
+  const std::vector<Var> wanted = CovarianceTargets(vars);
+  std::map<Var, int> offset;  // of each wanted variable's columns in the right-hand side
   int rhs = 0;
-  for (const Var& v : wanted) rhs += Dim(v);
-  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, rhs);
-  for (int k = 0, o = 0; k < static_cast<int>(wanted.size()); o += Dim(wanted[k]), ++k) {
-    e.block(layout.Col(wanted[k]), o, Dim(wanted[k]), Dim(wanted[k])).setIdentity();
+  for (const Var& v : wanted) {
+    offset[v] = rhs;
+    rhs += Dim(v);
   }
+  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, rhs);
+  for (const Var& v : wanted) e.block(layout.Col(v), offset[v], Dim(v), Dim(v)).setIdentity();
   const Eigen::MatrixXd x = information.solve(e);
   landmark_cov_.clear();
   mover_cov_.clear();
   if (information.info() != Eigen::Success || !x.allFinite()) return;
-  auto block = [&](const Var& a, int o, int dim) { return x.block(layout.Col(a), o, dim, dim); };
+  auto block = [&](const Var& a, const Var& b) { return x.block(layout.Col(a), offset[b], Dim(a), Dim(b)); };
+  const Var pose{Var::kPose, window_.back().step}, correction{Var::kCorrection, 0};
   pose_correction_cov_.setZero();
-  int o = 0;
-  if (!window_.back().fixed) {
-    const int pc = layout.Col({Var::kPose, window_.back().step});
-    const int cc = layout.Col({Var::kCorrection, 0});
-    pose_correction_cov_.topLeftCorner<3, 3>() = x.block(pc, 0, 3, 3);
-    pose_correction_cov_.topRightCorner<3, 3>() = x.block(pc, 3, 3, 3);
-    pose_correction_cov_.bottomLeftCorner<3, 3>() = x.block(cc, 0, 3, 3);
-    pose_correction_cov_.bottomRightCorner<3, 3>() = x.block(cc, 3, 3, 3);
-    o = 6;
-  } else {
-    pose_correction_cov_.bottomRightCorner<3, 3>() = block({Var::kCorrection, 0}, 0, 3);
-    o = 3;
+  pose_correction_cov_.bottomRightCorner<3, 3>() = block(correction, correction);
+  if (offset.count(pose) > 0) {
+    pose_correction_cov_.topLeftCorner<3, 3>() = block(pose, pose);
+    pose_correction_cov_.topRightCorner<3, 3>() = block(pose, correction);
+    pose_correction_cov_.bottomLeftCorner<3, 3>() = block(correction, pose);
   }
   for (const Var& v : wanted) {
-    if (v.kind == Var::kLandmark) landmark_cov_[static_cast<std::uint32_t>(v.key)] = block(v, o, 2);
-    if (v.kind == Var::kMover) mover_cov_[v.key] = block(v, o, 3);
-    if (v.kind == Var::kLandmark || v.kind == Var::kMover) o += Dim(v);
+    if (v.kind == Var::kLandmark) landmark_cov_[static_cast<std::uint32_t>(v.key)] = block(v, v);
+    if (v.kind == Var::kMover) mover_cov_[v.key] = block(v, v);
   }
 }
 

@@ -12,6 +12,7 @@
 #include "common/se2.h"
 #include "robot_agent/filters/odometry_calibration.h"
 #include "robot_agent/options/agent_options.h"
+#include "robot_agent/smoother/normal_equations.h"
 
 namespace mrslam::robot_agent::smoother {
 
@@ -44,8 +45,11 @@ namespace mrslam::robot_agent::smoother {
 //   (x - x0)^T H_p (x - x0) + 2 g_p^T (x - x0) over the variables it names, x0 the values at
 //   marginalization (heading differences wrapped); it starts as the calibration prior
 //   N((1, 1, 0), diag(calibration_prior_sd^2)).
-// Solve: Levenberg-Marquardt on the sparse normal equations (J^T J + H_p), warm-started, then
-// the gate re-decided and solved again while the set of outliers changes (at most 3 rounds).
+// Solve: Levenberg-Marquardt on the sparse normal equations (J^T J + H_p), warm-started from
+// the last solution, at most max_iterations iterations (a solution left short of convergence is
+// carried on at the next keyframe), stopping when the step or the relative decrease of the cost
+// is negligible; then the gate re-decided and solved again while the set of outliers changes
+// (at most 3 rounds).
 // When the window holds more than window_keyframes keyframes, the oldest is marginalized: the
 // factors touching it and the prior are linearized at the current estimate into H, g over the
 // variables involved, and the oldest pose eliminated by the Schur complement
@@ -162,7 +166,7 @@ class KeyframeGraph {
       return it == col.end() ? -1 : it->second;
     }
   };
-  struct Rows;
+  using Rows = NormalEquations;
   static std::int64_t MoverKey(std::uint32_t track, int step) {
     return (static_cast<std::int64_t>(track) << 32) | static_cast<std::uint32_t>(step);
   }
@@ -200,16 +204,18 @@ class KeyframeGraph {
   void AddReadingRows(const Layout& layout, const Keyframe& kf, Rows* rows) const;
   void AddMoverRows(const Layout& layout, std::uint32_t track, int from_step, int to_step, Rows* rows) const;
   Eigen::Vector2d WhitenedResidual(const common::Pose2& x, const Eigen::Vector2d& p, const Reading& z) const;
-  // The prior's terms: H_p (as triplets at the layout's columns), its gradient at the current
-  // values, and its cost.
-  void AddPrior(const Layout& layout, std::vector<Eigen::Triplet<double>>* h, Eigen::VectorXd* g, double* cost) const;
+  // The prior's terms: H_p at the layout's columns, its gradient at the current values, its cost.
+  void AddPrior(const Layout& layout, Rows* rows) const;
+  Rows Equations(const Layout& layout, bool only_oldest, bool jacobians) const;
   double SolveOnce();
   bool UpdateInliers();
   void Marginalize();
+  std::vector<Var> CovarianceTargets(const std::vector<Var>& vars) const;
   void ComputeCovariances();
 
   double dt_s_;
   int window_keyframes_;
+  int max_iterations_;
   double huber_k_, gate_;
   Eigen::Vector3d robot_var_, landmark_var_;
   Eigen::Vector2d z_w_;

@@ -151,6 +151,8 @@ bool OnlineSmoother::Recover(const Support& now) {
     points.push_back(common::PointFromRangeBearing({}, {z.range_m, z.bearing_rad}));
   Support best = now;
   Pose2 best_pose;
+  const Pose2 here = graph_.KeyframePose();
+  const double max_distance = options_.filter.smoother.max_relocation_m;
   const double tolerance = 6.0 * lidar.range_noise_sd_m + 0.05;
   for (std::size_t i = 0; i < points.size(); ++i) {
     for (std::size_t j = i + 1; j < points.size(); ++j) {
@@ -159,8 +161,10 @@ bool OnlineSmoother::Recover(const Support& now) {
         for (const auto& b : landmarks) {
           if (a.track == b.track || std::abs((b.mean - a.mean).norm() - dq) > tolerance + 0.05 * dq) continue;
           const Pose2 x = PoseFromPairs(points[i], points[j], a.mean, b.mean);
+          if ((x.Translation() - here.Translation()).norm() > max_distance) continue;
           const Support candidate = Explain(x);
-          if (candidate.fit > best.fit) {
+          // Better, and the mapped landmarks in view there explain readings (mostly).
+          if (candidate.fit > best.fit && 2 * candidate.seen > candidate.in_view) {
             best = candidate;
             best_pose = x;
           }
@@ -181,6 +185,43 @@ bool OnlineSmoother::Recover(const Support& now) {
   return true;
 }
 
+// The front end's landmark of a track (its identity, provenance, motion), or a new one of
+// this robot's.
+MapLandmark OnlineSmoother::FrontLandmark(std::uint32_t track) const {
+  for (const MapLandmark& l : front_.landmarks) {
+    if (l.track_id == track) return l;
+  }
+  MapLandmark m;
+  m.track_id = track;
+  m.origin_robot = options_.TeamIndex(options_.robot_id);
+  m.origin_track = track;
+  return m;
+}
+
+// The graph's landmarks: the static points and the moving ones predicted to `step`.
+std::vector<MapLandmark> OnlineSmoother::GraphLandmarks(int step) const {
+  std::vector<MapLandmark> out;
+  for (const auto& l : graph_.Landmarks()) {
+    MapLandmark m = FrontLandmark(l.track);
+    m.mean << l.mean, 0.0;
+    m.covariance.setZero();
+    m.covariance.topLeftCorner<2, 2>() = l.covariance;
+    m.covariance(2, 2) = kUnknownHeadingVar;
+    m.motion = filters::LandmarkMotionKind::kStatic;
+    m.moving = false;
+    m.tentative = false;
+    out.push_back(m);
+  }
+  for (const auto& l : graph_.Movers()) {
+    MapLandmark m = FrontLandmark(l.track);
+    const KeyframeGraph::Prediction p = graph_.PredictMover(l, step);
+    m.mean = p.state.Vector();
+    m.covariance = p.covariance;
+    out.push_back(m);
+  }
+  return out;
+}
+
 FilterEstimate OnlineSmoother::Estimate() const {
   FilterEstimate out;
   out.step = front_.step;
@@ -191,46 +232,17 @@ FilterEstimate OnlineSmoother::Estimate() const {
   out.particles = front_.particles;
   out.labels_detections = true;
   out.detection_tracks = front_.detection_tracks;
-  std::map<std::uint32_t, const MapLandmark*> front_by_track;
-  for (const MapLandmark& l : front_.landmarks) front_by_track[l.track_id] = &l;
+  out.landmarks = GraphLandmarks(static_cast<int>(out.step));
   std::set<std::uint32_t> in_graph;
-  for (const auto& l : graph_.Landmarks()) {
-    MapLandmark m;
-    const auto it = front_by_track.find(l.track);
-    if (it != front_by_track.end()) m = *it->second;
-    m.track_id = l.track;
-    m.mean << l.mean, 0.0;
-    m.covariance.setZero();
-    m.covariance.topLeftCorner<2, 2>() = l.covariance;
-    m.covariance(2, 2) = kUnknownHeadingVar;
-    m.motion = filters::LandmarkMotionKind::kStatic;
-    m.moving = false;
-    m.tentative = false;
-    if (m.origin_robot < 0) m.origin_robot = options_.TeamIndex(options_.robot_id);
-    if (m.origin_track == 0) m.origin_track = l.track;
-    in_graph.insert(l.track);
-    out.landmarks.push_back(m);
-  }
-  for (const auto& l : graph_.Movers()) {
-    MapLandmark m;
-    const auto it = front_by_track.find(l.track);
-    if (it != front_by_track.end()) m = *it->second;
-    const KeyframeGraph::Prediction p = graph_.PredictMover(l, static_cast<int>(out.step));
-    m.track_id = l.track;
-    m.mean = p.state.Vector();
-    m.covariance = p.covariance;
-    in_graph.insert(l.track);
-    out.landmarks.push_back(m);
-  }
-  // The front end's other landmarks (moving, or not yet in the graph), re-anchored: where the
-  // front end sees them from its pose, seen from the graph's.
+  for (const MapLandmark& l : out.landmarks) in_graph.insert(l.track_id);
+  // The front end's other landmarks (not in the graph yet), re-anchored: where the front end
+  // sees them from its pose, seen from the graph's.
   const Pose2 shift = common::Compose(out.pose, common::Inverse(front_.pose));
   const Eigen::Matrix2d rot = common::ComposeJacobianRight(shift, {}).topLeftCorner<2, 2>();
   for (const MapLandmark& l : front_.landmarks) {
     if (in_graph.count(l.track_id) > 0) continue;
     MapLandmark m = l;
-    const Pose2 moved = common::Compose(shift, Pose2::FromVector(l.mean));
-    m.mean = moved.Vector();
+    m.mean = common::Compose(shift, Pose2::FromVector(l.mean)).Vector();
     m.covariance.topLeftCorner<2, 2>() = rot * l.covariance.topLeftCorner<2, 2>() * rot.transpose();
     m.covariance.block<2, 1>(0, 2) = rot * l.covariance.block<2, 1>(0, 2);
     m.covariance.block<1, 2>(2, 0) = m.covariance.block<2, 1>(0, 2).transpose();

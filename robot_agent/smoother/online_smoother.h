@@ -51,6 +51,8 @@ class OnlineSmoother : public filters::SlamFilter {
   std::vector<KeyframeGraph::Reading> LabelledReadings(const common::SensorStep& step,
                                                        const filters::FilterEstimate& front) const;
   void UpdateTracks(const filters::FilterEstimate& front);
+  filters::MapLandmark FrontLandmark(std::uint32_t track) const;
+  std::vector<filters::MapLandmark> GraphLandmarks(int step) const;
   // How well pose x explains the newest keyframe's readings by the static map: readings within
   // the gate of a mapped landmark (with the landmark each is relabelled to), mapped landmarks
   // well inside the view (within 0.9 of the range, 0.45 of the field of view) and how many of

@@ -12,7 +12,7 @@
 // filter sees the scan, so it scores what perfect rejection of moving landmarks reaches.
 //
 //   mrslam_grid --scenario FILE --out DIR [--runs N] [--frames K] [--threads T]
-//               [--particles P] [--filters ekf,ekf_ela,fastslam,ekf_oracle] [--set k=v]... [--multi-process]
+//               [--particles P] [--filters ekf,ekf_ela,fastslam,smoother,ekf_oracle] [--set k=v]... [--multi-process]
 // A run that fails is reported and left out and the others go on; the exit code is then 3.
 // The jobs are grid_job's, a run and its scoring grid_run's, tables.md grid_tables'.
 #include <chrono>
@@ -55,8 +55,8 @@ std::vector<std::string> Split(const std::string& text) {
 std::vector<std::string> ParseFilters(const std::string& text, bool multi_process) {
   std::vector<std::string> filters = Split(text);
   for (const auto& f : filters) {
-    if (f != "ekf" && f != "ekf_ela" && f != "fastslam" && f != kOracle) {
-      throw std::runtime_error("unknown filter '" + f + "' (ekf, ekf_ela, fastslam or " + kOracle + ")");
+    if (f != "ekf" && f != "ekf_ela" && f != "fastslam" && f != "smoother" && f != kOracle) {
+      throw std::runtime_error("unknown filter '" + f + "' (ekf, ekf_ela, fastslam, smoother or " + kOracle + ")");
     }
     if (f == kOracle && multi_process) {
       throw std::runtime_error(std::string(kOracle) + " runs in-process only (the agents see no truth)");

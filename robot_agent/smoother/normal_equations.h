@@ -1,0 +1,45 @@
+#pragma once
+
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+namespace mrslam::robot_agent::smoother {
+
+// The Gauss-Newton normal equations of a sum of whitened residual blocks, built block by block
+// without forming the Jacobian: H = sum J^T J (triplets, summed when made a matrix), g = sum
+// J^T r, and the cost the caller adds (a robust loss's may differ from |r|^2). A block is r
+// (size n) and its Jacobian blocks (n x k) at column offsets (-1: a known quantity, no column).
+// With jacobians false only the cost is kept.
+struct NormalEquations {
+  NormalEquations(int cols, bool with_jacobians) : jacobians(with_jacobians), g(Eigen::VectorXd::Zero(cols)) {}
+
+  void Add(const Eigen::VectorXd& r, const std::vector<std::pair<int, Eigen::MatrixXd>>& blocks) {
+    if (!jacobians) return;
+    for (const auto& [col_a, ja] : blocks) {
+      if (col_a < 0) continue;
+      g.segment(col_a, ja.cols()) += ja.transpose() * r;
+      for (const auto& [col_b, jb] : blocks) {
+        if (col_b < 0) continue;
+        const Eigen::MatrixXd m = ja.transpose() * jb;
+        for (int i = 0; i < m.rows(); ++i) {
+          for (int j = 0; j < m.cols(); ++j) h.emplace_back(col_a + i, col_b + j, m(i, j));
+        }
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> Matrix() const {
+    Eigen::SparseMatrix<double> out(static_cast<int>(g.size()), static_cast<int>(g.size()));
+    out.setFromTriplets(h.begin(), h.end());
+    return out;
+  }
+
+  bool jacobians;
+  double cost = 0.0;
+  Eigen::VectorXd g;
+  std::vector<Eigen::Triplet<double>> h;
+};
+
+}  // namespace mrslam::robot_agent::smoother
