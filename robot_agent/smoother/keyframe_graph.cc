@@ -362,7 +362,7 @@ void KeyframeGraph::AddReadingRows(const Layout& layout, const Keyframe& kf, Row
     rows->cost += s > huber_k_ ? 2.0 * huber_k_ * s - huber_k_ * huber_k_ : s * s;
     r *= scale;
     const Eigen::Matrix2d w = scale * z_w_.asDiagonal();
-    Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, Dim(target));
+    Rows::Block jp = Rows::Block::Zero(2, Dim(target));
     jp.leftCols<2>() = -w * filters::MeasurementJacobianLandmark(p, kf.pose);
     rows->Add(r, {{x_col, -w * filters::MeasurementJacobianPose(p, kf.pose)}, {p_col, jp}});
   }
@@ -398,9 +398,9 @@ void KeyframeGraph::BuildRows(const Layout& layout, bool only_oldest, Rows* rows
     previous = MoverStep(key);
     if (chain_starts_.count(key) > 0 && (!only_oldest || previous == oldest)) {
       // The weak prior on the heading the chain started with.
-      Eigen::MatrixXd j = Eigen::MatrixXd::Zero(1, 3);
+      Rows::Block j = Rows::Block::Zero(1, 3);
       j(0, 2) = 1e-3;
-      const Eigen::VectorXd r = Eigen::VectorXd::Constant(1, 1e-3 * WrapAngle(state.heading - chain_starts_.at(key)));
+      const Rows::Residual r = Rows::Residual::Constant(1, 1e-3 * WrapAngle(state.heading - chain_starts_.at(key)));
       rows->cost += r.squaredNorm();
       rows->Add(r, {{layout.Col({Var::kMover, key}), j}});
     }
@@ -548,15 +548,20 @@ void KeyframeGraph::Marginalize() {
   window_.front().has_odometry = false;
 }
 
-// The variables whose marginals are reported: the newest pose (unless the known start), the
-// correction, every static landmark and each moving landmark's newest state.
+// The variables whose marginals are computed: the newest pose (unless the known start), the
+// correction, each moving landmark's newest state, and the static landmarks read at the newest
+// keyframe or without one yet (the others keep theirs: information only accrues, so a kept
+// covariance errs on the large side).
 std::vector<KeyframeGraph::Var> KeyframeGraph::CovarianceTargets(const std::vector<Var>& vars) const {
   std::vector<Var> wanted;
   if (!window_.back().fixed) wanted.push_back({Var::kPose, window_.back().step});
   wanted.push_back({Var::kCorrection, 0});
+  std::set<std::uint32_t> read;
+  for (const auto& r : window_.back().readings) read.insert(r.z.track);
   std::map<std::uint32_t, Var> newest_mover;
   for (const Var& v : vars) {
-    if (v.kind == Var::kLandmark) wanted.push_back(v);
+    const auto track = static_cast<std::uint32_t>(v.key);
+    if (v.kind == Var::kLandmark && (read.count(track) > 0 || landmark_cov_.count(track) == 0)) wanted.push_back(v);
     if (v.kind == Var::kMover) newest_mover[MoverTrack(v.key)] = v;  // keys ascend by step
   }
   for (const auto& [track, v] : newest_mover) wanted.push_back(v);
@@ -582,7 +587,12 @@ void KeyframeGraph::ComputeCovariances() {
   Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, rhs);
   for (const Var& v : wanted) e.block(layout.Col(v), offset[v], Dim(v), Dim(v)).setIdentity();
   const Eigen::MatrixXd x = information.solve(e);
-  landmark_cov_.clear();
+  std::map<std::uint32_t, Eigen::Matrix2d> kept;
+  for (const Var& v : vars) {
+    const auto it = landmark_cov_.find(static_cast<std::uint32_t>(v.key));
+    if (v.kind == Var::kLandmark && it != landmark_cov_.end()) kept.insert(*it);
+  }
+  landmark_cov_ = std::move(kept);
   mover_cov_.clear();
   if (information.info() != Eigen::Success || !x.allFinite()) return;
   auto block = [&](const Var& a, const Var& b) { return x.block(layout.Col(a), offset[b], Dim(a), Dim(b)); };

@@ -56,7 +56,10 @@ namespace mrslam::robot_agent::smoother {
 // H' = H_rr - H_rm H_mm^-1 H_mr, g' = g_r - H_rm H_mm^-1 g_m (m: the oldest pose and the moving
 // landmarks' states at it); its readings and odometry leave the window and its pose joins the
 // fixed history (Path).
-// Marginal covariances are blocks of (J^T J + H_p)^-1 at the solution (Laplace approximation).
+// Marginal covariances are blocks of (J^T J + H_p)^-1 at the solution (Laplace approximation):
+// the newest pose's, the correction's and the moving landmarks' at every solve, a static
+// landmark's when it is read (in between it keeps the last, which errs on the large side as
+// information only accrues).
 class KeyframeGraph {
  public:
   using Motion = filters::OdometryCalibration::Motion;

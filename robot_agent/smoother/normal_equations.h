@@ -1,5 +1,6 @@
 #pragma once
 
+#include <initializer_list>
 #include <utility>
 #include <vector>
 
@@ -13,17 +14,21 @@ namespace mrslam::robot_agent::smoother {
 // J^T r, and the cost the caller adds (a robust loss's may differ from |r|^2). A block is r
 // (size n) and its Jacobian blocks (n x k) at column offsets (-1: a known quantity, no column).
 // With jacobians false only the cost is kept.
+// Blocks are at most 3 x 3 (poses, landmark states), held without heap allocation.
 struct NormalEquations {
+  using Residual = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
+  using Block = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
+
   NormalEquations(int cols, bool with_jacobians) : jacobians(with_jacobians), g(Eigen::VectorXd::Zero(cols)) {}
 
-  void Add(const Eigen::VectorXd& r, const std::vector<std::pair<int, Eigen::MatrixXd>>& blocks) {
+  void Add(const Residual& r, std::initializer_list<std::pair<int, Block>> blocks) {
     if (!jacobians) return;
     for (const auto& [col_a, ja] : blocks) {
       if (col_a < 0) continue;
       g.segment(col_a, ja.cols()) += ja.transpose() * r;
       for (const auto& [col_b, jb] : blocks) {
         if (col_b < 0) continue;
-        const Eigen::MatrixXd m = ja.transpose() * jb;
+        const Block m = ja.transpose() * jb;
         for (int i = 0; i < m.rows(); ++i) {
           for (int j = 0; j < m.cols(); ++j) h.emplace_back(col_a + i, col_b + j, m(i, j));
         }
