@@ -27,7 +27,7 @@ struct AgentFlags {
 void AddFlags(CLI::App& app, AgentFlags* flags) {
   common::AddCommonFlags(app, &flags->common);
   app.add_option("--robot", flags->robot_id, "Robot id from the scenario (e.g. r1)")->required();
-  app.add_option("--filter", flags->filter, "fastslam, ekf or ekf_ela (overrides filter.type)");
+  app.add_option("--filter", flags->filter, "fastslam, ekf, ekf_ela or smoother (overrides filter.type)");
   app.add_option("--particles", flags->particles, "Number of particles (overrides filter.particles)");
   app.add_option("--wait-readers", flags->estimate_readers,
                  "Before saying ready, wait until this many readers match the estimate topic");
