@@ -354,7 +354,6 @@ void ParseNoise(Section& top, ScenarioOptions* o) {
   n.RejectUnknownKeys();
 }
 
-// The filter.
 // The online smoother's settings (filter.smoother).
 void ParseSmoother(Section& filter, robot_agent::SmootherOptions* d) {
   Section s(filter.Raw("smoother"), "filter.smoother");
@@ -373,6 +372,7 @@ void ParseSmoother(Section& filter, robot_agent::SmootherOptions* d) {
   s.RejectUnknownKeys();
 }
 
+// The filter.
 void ParseFilter(Section& top, ScenarioOptions* o) {
   Section f(top.Raw("filter"), "filter");
   auto& d = o->filter;
