@@ -99,6 +99,7 @@ std::string LidarTopic(const std::string& robot_id) { return "mrslam/" + robot_i
 std::string ImuTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/imu"; }
 std::string OdometryTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/odom"; }
 std::string EstimateTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/estimate"; }
+std::string FinalTrajectoryTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/final_trajectory"; }
 std::string AckTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/ack"; }
 std::string PeerTopic(const std::string& recipient_id, const std::string& kind) {
   return "mrslam/peer/" + recipient_id + "/" + kind;

@@ -191,6 +191,7 @@ std::string LidarTopic(const std::string& robot_id);
 std::string ImuTopic(const std::string& robot_id);
 std::string OdometryTopic(const std::string& robot_id);
 std::string EstimateTopic(const std::string& robot_id);
+std::string FinalTrajectoryTopic(const std::string& robot_id);
 std::string AckTopic(const std::string& robot_id);
 // A recipient's inbox for one kind of peer message: mrslam/peer/<recipient>/<kind>.
 std::string PeerTopic(const std::string& recipient_id, const std::string& kind);

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -90,6 +91,11 @@ class SlamFilter {
   // own landmark (MatchLandmarks' kTooClose), which are left out. Returns how many were added.
   virtual int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                              double gate_probability, double too_close_m) = 0;
+
+  // The final map product of a run: the estimate of the whole path given all the data, (step,
+  // pose) in the own frame, from an estimator that smooths; empty for a filter, whose online path
+  // is its final trajectory.
+  virtual std::vector<std::pair<int, common::Pose2>> FinalTrajectory() const { return {}; }
 
   // Moves every pose hypothesis to N(pose, covariance), the map kept: the robot was found
   // elsewhere than its motion said. Returns whether the filter supports it (fastslam).

@@ -45,6 +45,8 @@ struct AgentNode::Impl {
   dds::Reader<msg::StepClockPubSubType> clock_reader;
   dds::Writer<msg::EstimatePubSubType> estimate_writer;
   dds::Writer<msg::StepAckPubSubType> ack_writer;
+  dds::Writer<msg::FinalTrajectoryPubSubType> final_writer;
+  std::map<std::uint32_t, double> step_times;  // every step's time, for the final trajectory
   // This agent's inbox (peer to peer) and, lazily, writers into the peers' inboxes.
   dds::Reader<msg::RelativeMeasurementPubSubType> relative_inbox;
   dds::Reader<msg::MapSnapshotPubSubType> map_inbox;
@@ -75,6 +77,7 @@ struct AgentNode::Impl {
         clock_reader(participant, dds::kClockTopic, &notifier),
         estimate_writer(participant, dds::EstimateTopic(a.robot_id)),
         ack_writer(participant, dds::AckTopic(a.robot_id)),
+        final_writer(participant, dds::FinalTrajectoryTopic(a.robot_id)),
         relative_inbox(participant, dds::PeerTopic(a.robot_id, "relative"), &notifier),
         map_inbox(participant, dds::PeerTopic(a.robot_id, "map"), &notifier),
         moved_inbox(participant, dds::PeerTopic(a.robot_id, "moved"), &notifier),
@@ -226,6 +229,19 @@ struct AgentNode::Impl {
     }
   }
 
+  // At the end of the run: publishes the estimator's final trajectory, if it has one; returns the
+  // number of chunks.
+  std::uint32_t PublishFinalTrajectory(std::uint32_t k, double time_s) {
+    const auto path = filter->FinalTrajectory();
+    if (path.empty()) return 0;
+    const auto chunks = FinalTrajectoryChunks(path, step_times, {agent.robot_id, k, time_s});
+    for (const auto& chunk : chunks) {
+      if (!final_writer.Write(chunk)) throw AgentError("DDS refused to publish the final trajectory");
+    }
+    spdlog::info("final trajectory: {} poses in {} chunk(s)", path.size(), chunks.size());
+    return static_cast<std::uint32_t>(chunks.size());
+  }
+
   // Processes the next step if all of it is here. Returns true if it did.
   bool TryProcess(bool* last) {
     const std::uint32_t k = next_step;
@@ -268,6 +284,8 @@ struct AgentNode::Impl {
     m.frames_known(cooperation.frames_known());
     m.rejected_samples(static_cast<std::uint32_t>(counters.rejected_samples));
     m.step_cpu_ms(step_cpu_ms);
+    step_times[k] = time_s;
+    if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));
     Acknowledge(k, time_s, sent);
     ++counters.steps_processed;
@@ -309,6 +327,7 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
       if (last) {
         // Let the evaluator and the simulator receive the final estimate and ack.
         a.estimate_writer.WaitForAcknowledgments(milliseconds(5000));
+        a.final_writer.WaitForAcknowledgments(milliseconds(5000));
         a.ack_writer.WaitForAcknowledgments(milliseconds(5000));
         spdlog::info("agent {} done: {} steps, {} rejected samples", a.agent.robot_id, a.counters.steps_processed,
                      a.counters.rejected_samples);

@@ -162,4 +162,26 @@ cooperation::LandmarkMovedNotice FromMsg(const msg::LandmarkMovedNotice& m) {
   return n;
 }
 
+std::vector<msg::FinalTrajectory> FinalTrajectoryChunks(const std::vector<std::pair<int, common::Pose2>>& path,
+                                                        const std::map<std::uint32_t, double>& step_times,
+                                                        const common::Stamp& stamp) {
+  const std::size_t chunks = (path.size() + kFinalTrajectoryChunkPoses - 1) / kFinalTrajectoryChunkPoses;
+  std::vector<msg::FinalTrajectory> out(chunks);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    out[c].stamp(dds::ToMsg(stamp));
+    out[c].chunk(static_cast<std::uint32_t>(c));
+    out[c].chunks(static_cast<std::uint32_t>(chunks));
+  }
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const auto& [step, pose] = path[i];
+    msg::TrajectoryPose p;
+    p.step(static_cast<std::uint32_t>(step));
+    const auto t = step_times.find(static_cast<std::uint32_t>(step));
+    p.time_s(t == step_times.end() ? 0.0 : t->second);
+    p.pose(dds::ToMsg(pose));
+    out[i / kFinalTrajectoryChunkPoses].poses().push_back(p);
+  }
+  return out;
+}
+
 }  // namespace mrslam::robot_agent

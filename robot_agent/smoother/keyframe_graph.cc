@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -59,6 +60,7 @@ KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
   prior_.x0 = {correction_};
   prior_.h = sd.cwiseProduct(sd).cwiseInverse().asDiagonal();
   prior_.g = Eigen::Vector3d::Zero();
+  calibration_prior_ = prior_;
 }
 
 Pose2 KeyframeGraph::Increment(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction) const {
@@ -158,6 +160,7 @@ void KeyframeGraph::CutAndMove(int from_step, const Pose2& correction) {
     if (kf.step < from_step || kf.fixed) continue;
     if (!cut) {
       kf.has_odometry = false;
+      kf.odometry_cut = true;
       cut = true;
     }
     kf.pose = common::Compose(correction, kf.pose);
@@ -500,9 +503,13 @@ bool KeyframeGraph::UpdateInliers() {
 }
 
 void KeyframeGraph::Solve() {
+  SolveWithGate();
+  ComputeCovariances();
+}
+
+void KeyframeGraph::SolveWithGate() {
   SolveOnce();
   for (int round = 0; round < 3 && UpdateInliers(); ++round) SolveOnce();
-  ComputeCovariances();
 }
 
 void KeyframeGraph::Marginalize() {
@@ -543,7 +550,7 @@ void KeyframeGraph::Marginalize() {
     movers_.erase(vars[i].key);
     chain_starts_.erase(vars[i].key);
   }
-  history_.emplace_back(oldest.step, oldest.pose);
+  history_.push_back(oldest);
   window_.pop_front();
   window_.front().has_odometry = false;
 }
@@ -651,9 +658,23 @@ KeyframeGraph::Prediction KeyframeGraph::PredictMover(const Mover& mover, int st
 }
 
 std::vector<std::pair<int, Pose2>> KeyframeGraph::Path() const {
-  std::vector<std::pair<int, Pose2>> out = history_;
+  std::vector<std::pair<int, Pose2>> out;
+  out.reserve(history_.size() + window_.size());
+  for (const auto& kf : history_) out.emplace_back(kf.step, kf.pose);
   for (const auto& kf : window_) out.emplace_back(kf.step, kf.pose);
   return out;
+}
+
+std::vector<std::pair<int, Pose2>> KeyframeGraph::SmoothAll() const {
+  KeyframeGraph all(*this);
+  all.window_.insert(all.window_.begin(), history_.begin(), history_.end());
+  all.history_.clear();
+  for (auto& kf : all.window_) kf.has_odometry = !kf.fixed && !kf.odometry_cut;
+  all.prior_ = calibration_prior_;
+  all.window_keyframes_ = std::numeric_limits<int>::max();
+  all.max_iterations_ = 100;
+  all.SolveWithGate();
+  return all.Path();
 }
 
 std::vector<std::pair<KeyframeGraph::Reading, bool>> KeyframeGraph::NewestReadings() const {

@@ -130,6 +130,10 @@ class KeyframeGraph {
   const Eigen::Vector3d& Correction() const { return correction_; }
   // Every keyframe's step and pose, the marginalized ones as they were when they left.
   std::vector<std::pair<int, common::Pose2>> Path() const;
+  // The maximum a posteriori estimate of every keyframe's pose of the run: every keyframe's
+  // factors (none marginalized; the prior is the calibration's alone) solved at once, started
+  // from the current estimates, to convergence. The final map product of a run.
+  std::vector<std::pair<int, common::Pose2>> SmoothAll() const;
   // The readings of the newest keyframe and whether each is within the gate at the solution.
   std::vector<std::pair<Reading, bool>> NewestReadings() const;
   int WindowSize() const { return static_cast<int>(window_.size()); }
@@ -144,6 +148,7 @@ class KeyframeGraph {
     common::Pose2 pose;
     bool fixed = false;                      // the run's first pose
     bool has_odometry = false;               // a factor from the previous keyframe
+    bool odometry_cut = false;               // cut by CutAndMove: none even in SmoothAll
     std::vector<std::vector<Motion>> steps;  // the odometry since the previous keyframe, per step
     Eigen::Matrix3d odometry_whitening = Eigen::Matrix3d::Identity();  // L^-1
     std::vector<StoredReading> readings;
@@ -211,6 +216,7 @@ class KeyframeGraph {
   void AddPrior(const Layout& layout, Rows* rows) const;
   Rows Equations(const Layout& layout, bool only_oldest, bool jacobians) const;
   double SolveOnce();
+  void SolveWithGate();  // SolveOnce, then again while the gate's decisions change
   bool UpdateInliers();
   void Marginalize();
   std::vector<Var> CovarianceTargets(const std::vector<Var>& vars) const;
@@ -223,8 +229,8 @@ class KeyframeGraph {
   Eigen::Vector3d robot_var_, landmark_var_;
   Eigen::Vector2d z_w_;
   std::deque<Keyframe> window_;
-  std::vector<std::pair<int, common::Pose2>> history_;  // marginalized keyframes
-  std::vector<std::vector<Motion>> pending_;            // the motion since the last keyframe
+  std::vector<Keyframe> history_;             // the marginalized keyframes, as they left
+  std::vector<std::vector<Motion>> pending_;  // the motion since the last keyframe
   std::map<std::uint32_t, Eigen::Vector2d> landmarks_;
   std::set<std::uint32_t> static_tracks_;
   std::map<std::uint32_t, MoverModel> mover_models_;  // the last model of every track once moving
@@ -233,6 +239,7 @@ class KeyframeGraph {
   std::map<std::int64_t, double> chain_starts_;       // states under the weak heading prior: its mean
   Eigen::Vector3d correction_{1.0, 1.0, 0.0};
   Prior prior_;
+  Prior calibration_prior_;  // the prior at the start
   // At the last solution: the joint covariance of the newest keyframe pose and the correction,
   // and each landmark's.
   Eigen::Matrix<double, 6, 6> pose_correction_cov_ = Eigen::Matrix<double, 6, 6>::Zero();

@@ -43,6 +43,9 @@ class OnlineSmoother : public filters::SlamFilter {
   int MergeLandmarks(const std::vector<filters::MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                      double gate_probability, double too_close_m) override;
 
+  // Every keyframe's pose, all the run's data solved at once (KeyframeGraph::SmoothAll).
+  std::vector<std::pair<int, common::Pose2>> FinalTrajectory() const override { return graph_.SmoothAll(); }
+
   const KeyframeGraph& Graph() const { return graph_; }
   // Times the pose was searched again and a better one found.
   int Recoveries() const { return recoveries_; }

@@ -147,6 +147,9 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     ExpectFiniteAtLeast(r, "union_completeness", 0.0, id);
     EXPECT_LE(r["union_completeness"].get<double>(), 1.0) << id;
     ExpectFiniteAtLeast(r, "step_cpu_ms_median", 1e-6, id);  // the agents measure their steps
+    // A filter's final trajectory is its online path.
+    ExpectFiniteAtLeast(r, "final_trajectory_rmse_m", 1e-9, id);
+    EXPECT_NEAR(r["final_trajectory_rmse_m"].get<double>(), r["position_rmse_m"].get<double>(), 1e-9) << id;
     EXPECT_GE(r["step_cpu_ms_p99"].get<double>(), r["step_cpu_ms_median"].get<double>()) << id;
     EXPECT_LT(r["position_rmse_m"].get<double>(), 20.0) << id;  // 12 steps of 0.65 m: a sanity bound
     EXPECT_LT(r["heading_rmse_deg"].get<double>(), 180.0) << id;
@@ -289,7 +292,13 @@ TEST(LauncherTest, TheOnlineSmootherRunsInLockstepAndBeatsDeadReckoning) {
     ExpectFiniteAtLeast(robot, "step_cpu_ms_median", 0.0, id);
     EXPECT_LT(robot["position_rmse_m"].get<double>(), robot["dead_reckoning_rmse_m"].get<double>()) << id;
     EXPECT_LT(robot["mean_nees"].get<double>(), 30.0) << id;
+    // The final trajectory, smoothed over the whole run, is closer to the truth than the online
+    // estimates were.
+    ExpectFiniteAtLeast(robot, "final_trajectory_rmse_m", 1e-9, id);
+    EXPECT_LT(robot["final_trajectory_rmse_m"].get<double>(), robot["position_rmse_m"].get<double>()) << id;
+    EXPECT_TRUE(std::filesystem::exists(out + "/trajectories/" + id + "_final.tum")) << id;
   }
+  EXPECT_THAT(ReadFile(out + "/logs/robot_agent_r1.log"), HasSubstr("final trajectory"));
   std::filesystem::remove(out + ".log");
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -88,6 +89,40 @@ TEST_F(RunEvaluatorTest, StepCpuTimeIsSummarizedByMedianAndP99) {
   EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["step_cpu_ms_median"].get<double>(), 2.0);
   EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["step_cpu_ms_p99"].get<double>(), 1.0 + 2.0 * 0.99);
   EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["step_cpu_ms_median"].get<double>(), 0.0);
+}
+
+TEST_F(RunEvaluatorTest, AnAnnouncedFinalTrajectoryIsAwaitedAndScored) {
+  RunEvaluator evaluator(scenario_);
+  common::GroundTruth truth;
+  truth.robots = {{"r1", {0.0, 0.0, 0.0}, false}, {"r2", {10.0, 0.0, 0.0}, false}};
+  truth.frames = {{"r1", {0.0, 0.0, 0.0}}, {"r2", {10.0, 0.0, 0.0}}};
+  for (std::uint32_t step = 0; step <= 1; ++step) {
+    truth.stamp.step = step;
+    evaluator.AddTruth(truth);
+    RobotEstimate r1, r2;
+    r1.step = r2.step = step;
+    r1.pose = {0.3, 0.4, 0.0};  // 0.5 m off online
+    if (step == 1) r1.final_trajectory_chunks = 2;
+    evaluator.AddEstimate("r1", r1);
+    evaluator.AddEstimate("r2", r2);
+  }
+  common::Odometry odometry;
+  odometry.stamp.step = 1;
+  evaluator.AddOdometry("r1", odometry);
+  evaluator.AddOdometry("r2", odometry);
+  EXPECT_FALSE(evaluator.Complete());
+  EXPECT_NE(evaluator.Missing().find("final trajectory, 0 of 2 chunks"), std::string::npos) << evaluator.Missing();
+  evaluator.AddFinalTrajectory("r1", 1, {{1, 0.1, {0.0, 0.1, 0.0}}});
+  EXPECT_FALSE(evaluator.Complete());
+  evaluator.AddFinalTrajectory("r1", 0, {{0, 0.0, {0.0, 0.0, 0.0}}});
+  ASSERT_TRUE(evaluator.Complete()) << evaluator.Missing();
+  const nlohmann::json summary = evaluator.Write(out_dir_, 0.0);
+  // r1: its final trajectory is 0 and 0.1 m off; r2, a filter, is scored on its online path.
+  EXPECT_NEAR(summary["robots"]["r1"]["final_trajectory_rmse_m"].get<double>(), std::sqrt(0.01 / 2.0), 1e-12);
+  EXPECT_NEAR(summary["robots"]["r1"]["position_rmse_m"].get<double>(), 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["final_trajectory_rmse_m"].get<double>(),
+                   summary["robots"]["r2"]["position_rmse_m"].get<double>());
+  EXPECT_TRUE(std::filesystem::exists(out_dir_ + "/trajectories/r1_final.tum"));
 }
 
 }  // namespace

@@ -1,8 +1,11 @@
 // evaluator: the only process besides world_sim that reads the truth. Scores every robot's
 // estimates in its own frame and writes metrics.csv, summary.json, TUM trajectories and tracks.csv.
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include <spdlog/spdlog.h>
 
@@ -31,8 +34,28 @@ RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
   e.frames_known = m.frames_known();
   e.rejected_samples = m.rejected_samples();
   e.step_cpu_ms = m.step_cpu_ms();
+  e.final_trajectory_chunks = m.final_trajectory_chunks();
   for (const auto& r : m.rendezvous()) e.rendezvous.push_back({r.peer_id(), r.step(), dds::FromMsg(r.t_self_peer())});
   return e;
+}
+
+// A chunk of a robot's final trajectory, or an empty message why it is rejected.
+std::string FinalChunkProblem(const msg::FinalTrajectory& m) {
+  if (m.chunks() == 0 || m.chunks() > 100000 || m.chunk() >= m.chunks()) return "chunk index out of range";
+  if (m.poses().size() > 1000) return "more than 1000 poses";
+  for (const auto& p : m.poses()) {
+    if (!std::isfinite(p.time_s()) || !std::isfinite(p.pose().x_m()) || !std::isfinite(p.pose().y_m()) ||
+        !std::isfinite(p.pose().heading_rad()))
+      return "a pose that is not finite";
+  }
+  return {};
+}
+
+std::vector<FinalPose> FromFinalMsg(const msg::FinalTrajectory& m) {
+  std::vector<FinalPose> out;
+  out.reserve(m.poses().size());
+  for (const auto& p : m.poses()) out.push_back({p.step(), p.time_s(), dds::FromMsg(p.pose())});
+  return out;
 }
 
 // Owns the participant and readers; feeds the RunEvaluator until the run is complete.
@@ -45,11 +68,14 @@ int Evaluate(const common::ScenarioOptions& scenario, int domain, bool shm, cons
   dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic, &notifier);
   std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimate_readers;
   std::map<std::string, std::unique_ptr<dds::Reader<msg::OdometryPubSubType>>> odometry_readers;
+  std::map<std::string, std::unique_ptr<dds::Reader<msg::FinalTrajectoryPubSubType>>> final_readers;
   for (const auto& r : scenario.robots) {
     estimate_readers[r.id] =
         std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id), &notifier);
     odometry_readers[r.id] =
         std::make_unique<dds::Reader<msg::OdometryPubSubType>>(participant, dds::OdometryTopic(r.id), &notifier);
+    final_readers[r.id] = std::make_unique<dds::Reader<msg::FinalTrajectoryPubSubType>>(
+        participant, dds::FinalTrajectoryTopic(r.id), &notifier);
   }
   RunEvaluator evaluator(scenario);
   std::uint64_t seen = 0;
@@ -82,6 +108,19 @@ int Evaluate(const common::ScenarioOptions& scenario, int domain, bool shm, cons
       msg::Odometry o;
       while (reader->TryTake(&o)) {
         evaluator.AddOdometry(id, dds::FromMsg(o));
+        got = true;
+      }
+    }
+    for (auto& [id, reader] : final_readers) {
+      msg::FinalTrajectory f;
+      while (reader->TryTake(&f)) {
+        const std::string problem =
+            f.stamp().robot_id() != id ? "it claims robot '" + f.stamp().robot_id() + "'" : FinalChunkProblem(f);
+        if (!problem.empty()) {
+          spdlog::warn("final trajectory chunk on {}'s topic ignored: {}", id, problem);
+          continue;
+        }
+        evaluator.AddFinalTrajectory(id, f.chunk(), FromFinalMsg(f));
         got = true;
       }
     }

@@ -58,6 +58,32 @@ void RunEvaluator::AddOdometry(const std::string& robot_id, const common::Odomet
 
 bool RunEvaluator::Complete() const { return Missing().empty(); }
 
+void RunEvaluator::AddFinalTrajectory(const std::string& robot_id, std::uint32_t chunk, std::vector<FinalPose> poses) {
+  final_chunks_[robot_id][chunk] = std::move(poses);
+}
+
+double RunEvaluator::ScoreFinalTrajectory(const std::string& id, const Pose2& frame, const std::string& out_dir) const {
+  std::vector<FinalPose> path;
+  if (const auto f = final_chunks_.find(id); f != final_chunks_.end()) {
+    for (const auto& [chunk, poses] : f->second) path.insert(path.end(), poses.begin(), poses.end());
+  } else {
+    for (const auto& [step, est] : estimates_.at(id)) path.push_back({step, est.time_s, est.pose});
+  }
+  std::ofstream tum;
+  OpenOrThrow(tum, std::filesystem::path(out_dir) / "trajectories" / (id + "_final.tum"));
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (const auto& p : path) {
+    const auto t = truth_.find(p.step);
+    const auto* rt = t == truth_.end() ? nullptr : FindEntity(t->second.robots, id);
+    if (rt == nullptr) continue;
+    sum += (p.pose.Translation() - TruthInOwnFrame(rt->pose, frame).Translation()).squaredNorm();
+    ++n;
+    tum << TumLine(p.time_s, p.pose);
+  }
+  return n == 0 ? 0.0 : std::sqrt(sum / static_cast<double>(n));
+}
+
 std::string RunEvaluator::Missing() const {
   const auto last = static_cast<std::uint32_t>(scenario_.run.steps);
   if (truth_.size() < last + 1) return fmt::format("truth: {} of {} steps", truth_.size(), last + 1);
@@ -66,6 +92,10 @@ std::string RunEvaluator::Missing() const {
     const auto o = odometry_.find(id);
     const std::size_t n = o == odometry_.end() ? 0 : o->second.size();
     if (n < last) return fmt::format("{}: odometry of {} of {} steps", id, n, last);
+    const std::uint32_t chunks = est.at(last).final_trajectory_chunks;
+    const auto f = final_chunks_.find(id);
+    const std::size_t got = f == final_chunks_.end() ? 0 : f->second.size();
+    if (got < chunks) return fmt::format("{}: final trajectory, {} of {} chunks", id, got, chunks);
   }
   return {};
 }
@@ -102,6 +132,8 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
     OpenOrThrow(files.tum_estimate, out / "trajectories" / (robot.id + "_estimate.tum"));
     OpenOrThrow(files.tum_truth, out / "trajectories" / (robot.id + "_truth.tum"));
     summary["robots"][robot.id] = ScoreRobot(robot.id, reached, &files);
+    summary["robots"][robot.id]["final_trajectory_rmse_m"] =
+        ScoreFinalTrajectory(robot.id, FrameOf(truth_.begin()->second, robot.id), out_dir);
     files.tum_estimate.close();
     files.tum_truth.close();
   }

@@ -37,6 +37,15 @@ struct RobotEstimate {
   // Samples and peer messages the agent has rejected so far (malformed, stale, not for it).
   std::uint32_t rejected_samples = 0;
   double step_cpu_ms = 0.0;  // the agent's CPU time for this step's estimation
+  // Last step: chunks of the agent's final trajectory to come (0: its online path is final).
+  std::uint32_t final_trajectory_chunks = 0;
+};
+
+// One pose of an agent's final trajectory (its own frame).
+struct FinalPose {
+  std::uint32_t step = 0;
+  double time_s = 0.0;
+  common::Pose2 pose;
 };
 
 // Scores a run: collects the truth and every robot's estimates and odometry by step, then
@@ -50,8 +59,11 @@ class RunEvaluator {
   void AddTruth(const common::GroundTruth& truth);
   void AddEstimate(const std::string& robot_id, const RobotEstimate& estimate);
   void AddOdometry(const std::string& robot_id, const common::Odometry& odometry);
+  // A chunk (0..chunks-1) of a robot's final trajectory.
+  void AddFinalTrajectory(const std::string& robot_id, std::uint32_t chunk, std::vector<FinalPose> poses);
 
-  // True once the truth of steps 0..N and every robot's estimate of step N are in.
+  // True once the truth of steps 0..N, every robot's estimate of step N and every final
+  // trajectory it announced are in.
   bool Complete() const;
   // What is still missing (for a timeout message).
   std::string Missing() const;
@@ -72,6 +84,9 @@ class RunEvaluator {
                             Outputs* files) const;
   static void WriteStep(const std::string& id, const common::Pose2& g1_from_gi, const RobotEstimate& estimate,
                         const StepScore& score, Outputs* files);
+  // The robot's final trajectory (the agent's, else its online path), scored against the truth
+  // and written as trajectories/<id>_final.tum; returns its position RMSE.
+  double ScoreFinalTrajectory(const std::string& id, const common::Pose2& frame, const std::string& out_dir) const;
   // The robot's rendezvous, each by the transform held at the end of the encounter.
   nlohmann::json ScoreRendezvous(const common::Pose2& frame, const RobotEstimate& last) const;
 
@@ -79,6 +94,7 @@ class RunEvaluator {
   std::map<std::uint32_t, common::GroundTruth> truth_;
   std::map<std::string, std::map<std::uint32_t, RobotEstimate>> estimates_;
   std::map<std::string, std::map<std::uint32_t, common::Odometry>> odometry_;
+  std::map<std::string, std::map<std::uint32_t, std::vector<FinalPose>>> final_chunks_;
 };
 
 }  // namespace mrslam::evaluator
