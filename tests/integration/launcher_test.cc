@@ -296,7 +296,7 @@ TEST(LauncherTest, TheOnlineSmootherRunsInLockstepAndBeatsDeadReckoning) {
     // estimates were.
     ExpectFiniteAtLeast(robot, "final_trajectory_rmse_m", 1e-9, id);
     EXPECT_LT(robot["final_trajectory_rmse_m"].get<double>(), robot["position_rmse_m"].get<double>()) << id;
-    EXPECT_TRUE(std::filesystem::exists(out + "/trajectories/" + id + "_final.tum")) << id;
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / "trajectories" / (id + "_final.tum"))) << id;
   }
   EXPECT_THAT(ReadFile(out + "/logs/robot_agent_r1.log"), HasSubstr("final trajectory"));
   std::filesystem::remove(out + ".log");
