@@ -14,7 +14,6 @@
 #include "common/gaussian.h"
 #include "robot_agent/filters/landmark_ekf.h"
 #include "robot_agent/filters/slam_filter.h"
-#include "robot_agent/smoother/whitened_rows.h"
 
 namespace mrslam::robot_agent::smoother {
 namespace {
@@ -32,8 +31,26 @@ Eigen::Vector3d Minus(const Pose2& a, const Pose2& b) {
 
 }  // namespace
 
-// The whitened residual rows of every factor and their Jacobian (whitened_rows.h).
-struct BatchSmoother::Rows : WhitenedRows {};
+// Appends the rows of one whitened residual block: r (size n) and its Jacobian blocks
+// (n x 3 each, zeros kept: the pattern depends on the structure only) for the variables at the
+// given column offsets (-1: a known quantity, no column).
+struct BatchSmoother::Rows {
+  std::vector<Eigen::Triplet<double>> jacobian;
+  std::vector<double> residual;
+
+  void Add(const Eigen::VectorXd& r, const std::vector<std::pair<int, Eigen::MatrixXd>>& blocks) {
+    const int row = static_cast<int>(residual.size());
+    for (int i = 0; i < r.size(); ++i) residual.push_back(r(i));
+    for (const auto& [col, j] : blocks) {
+      if (col < 0) continue;
+      for (int i = 0; i < j.rows(); ++i) {
+        for (int c = 0; c < j.cols(); ++c) {
+          jacobian.emplace_back(row + i, col + c, j(i, c));
+        }
+      }
+    }
+  }
+};
 
 BatchSmoother::BatchSmoother(const AgentOptions& options, const std::vector<RobotStart>& robots,
                              std::map<int, Kinematics> kinematics, int robot_detections_from_step, Unlisted unlisted)

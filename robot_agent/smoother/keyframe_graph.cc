@@ -462,12 +462,13 @@ double KeyframeGraph::SolveOnce() {
     solver.factorize(h);
     const Eigen::VectorXd delta = solver.solve(-g);
     if (solver.info() != Eigen::Success || !delta.allFinite()) break;
-    std::map<Var, Eigen::VectorXd> saved;
-    for (const Var& v : vars) saved[v] = Value(v);
+    std::vector<Eigen::VectorXd> saved;  // the values before the step, in the order of vars
+    saved.reserve(vars.size());
+    for (const Var& v : vars) saved.push_back(Value(v));
     apply(delta);
     const double after = Equations(layout, false, false).cost;
     if (after > cost) {
-      for (const auto& [v, x] : saved) SetValue(v, x);
+      for (std::size_t i = 0; i < vars.size(); ++i) SetValue(vars[i], saved[i]);
       lambda *= 10.0;
       if (lambda > 1e6) break;
       continue;

@@ -91,12 +91,13 @@ void OnlineSmoother::Process(const common::SensorStep& step) {
 OnlineSmoother::Support OnlineSmoother::Explain(const Pose2& x) const {
   const auto& lidar = options_.sensors.lidar;
   const double gate = common::ChiSquare2Quantile(options_.filter.smoother.reading_gate_probability);
+  const std::vector<KeyframeGraph::Landmark> landmarks = graph_.Landmarks();
   Support out;
   std::set<std::uint32_t> seen;
   for (const auto& [z, inlier] : graph_.NewestReadings()) {
     double best = gate;
     std::uint32_t track = 0;
-    for (const auto& l : graph_.Landmarks()) {
+    for (const auto& l : landmarks) {
       const common::RangeBearing h = common::MeasureRangeBearing(x, l.mean);
       const double dr = (z.range_m - h.range_m) / lidar.range_noise_sd_m;
       const double db = common::WrapAngle(z.bearing_rad - h.bearing_rad) / lidar.bearing_noise_sd_rad;
@@ -110,7 +111,7 @@ OnlineSmoother::Support OnlineSmoother::Explain(const Pose2& x) const {
     out.labels[z.track] = track;
     seen.insert(track);
   }
-  for (const auto& l : graph_.Landmarks()) {
+  for (const auto& l : landmarks) {
     const common::RangeBearing h = common::MeasureRangeBearing(x, l.mean);
     if (h.range_m < 0.9 * lidar.max_range_m && h.range_m > lidar.min_range_m &&
         std::abs(h.bearing_rad) < 0.45 * lidar.fov_rad) {
