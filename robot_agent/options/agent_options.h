@@ -31,7 +31,7 @@ struct SmootherOptions {
   int window_keyframes = 40;                 // keyframes kept as unknowns; older ones are marginalized
   int max_keyframe_gap_steps = 10;           // a keyframe at least this often, readings or not
   int front_end_particles = 50;              // the front end's particles
-  int max_iterations = 3;                    // Levenberg-Marquardt iterations per solve
+  int max_iterations = 1;                    // Levenberg-Marquardt iterations per solve
   double huber_k = 3.0;                      // the Huber loss's width on a reading's whitened residual norm
   double reading_gate_probability = 0.9999;  // chi-square 2 dof gate of a reading at the solution
   // Prior standard deviations of the odometry correction: speed factor, turn-rate factor,

@@ -426,7 +426,8 @@ void KeyframeGraph::AddPrior(const Layout& layout, Rows* rows) const {
     if (cols[i] < 0) continue;
     rows->g(cols[i]) += hd(i) + prior_.g(i);
     for (int j = 0; j < n; ++j) {
-      if (cols[j] >= 0 && prior_.h(i, j) != 0.0) rows->h.emplace_back(cols[i], cols[j], prior_.h(i, j));
+      if (cols[j] >= 0 && cols[j] <= cols[i] && prior_.h(i, j) != 0.0)
+        rows->h.emplace_back(cols[i], cols[j], prior_.h(i, j));
     }
   }
 }
@@ -440,7 +441,8 @@ KeyframeGraph::Rows KeyframeGraph::Equations(const Layout& layout, bool only_old
   return rows;
 }
 
-// One Levenberg-Marquardt solve over the window; returns the final cost.
+// One Levenberg-Marquardt solve over the window; returns the final cost. Keeps the last
+// iteration's factorization for the covariances when its damping is negligible.
 double KeyframeGraph::SolveOnce() {
   StartLandmarks();
   StartMovers();
@@ -449,19 +451,22 @@ double KeyframeGraph::SolveOnce() {
   auto apply = [&](const Eigen::VectorXd& delta) {
     for (const Var& v : vars) SetValue(v, Value(v) + delta.segment(layout.Col(v), Dim(v)));
   };
-  double lambda = 1e-6, cost = 0.0;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  double lambda = 1e-6, cost = 0.0, factorized_lambda = 0.0;
+  auto solver = std::make_shared<Factorization>();
   for (int iteration = 0; iteration < max_iterations_; ++iteration) {
     const Rows rows = Equations(layout, false, true);
     Eigen::SparseMatrix<double> h = rows.Matrix();
     const Eigen::VectorXd& g = rows.g;
     cost = rows.cost;
     const Eigen::VectorXd diag = h.diagonal();
-    for (int c = 0; c < layout.cols; ++c) h.coeffRef(c, c) += lambda * std::max(diag(c), 1e-9);
-    if (iteration == 0) solver.analyzePattern(h);
-    solver.factorize(h);
-    const Eigen::VectorXd delta = solver.solve(-g);
-    if (solver.info() != Eigen::Success || !delta.allFinite()) break;
+    // (The 1e-9 ridge keeps a variable nothing informs, such as a mover's state whose only
+    // reading left the gate, from making the matrix singular: its variance becomes 1e9.)
+    for (int c = 0; c < layout.cols; ++c) h.coeffRef(c, c) += lambda * std::max(diag(c), 1e-9) + kRidge;
+    if (iteration == 0) solver->analyzePattern(h);
+    solver->factorize(h);
+    factorized_lambda = lambda;
+    const Eigen::VectorXd delta = solver->solve(-g);
+    if (solver->info() != Eigen::Success || !delta.allFinite()) break;
     std::vector<Eigen::VectorXd> saved;  // the values before the step, in the order of vars
     saved.reserve(vars.size());
     for (const Var& v : vars) saved.push_back(Value(v));
@@ -478,6 +483,9 @@ double KeyframeGraph::SolveOnce() {
     lambda = std::max(lambda / 10.0, 1e-9);
     if (delta.cwiseAbs().maxCoeff() < 1e-7 || decrease < 1e-6 * (1.0 + cost)) break;
   }
+  const bool usable = solver->info() == Eigen::Success && factorized_lambda <= kUsableDamping;
+  information_ = usable ? std::move(solver) : nullptr;
+  information_vars_ = vars;
   return cost;
 }
 
@@ -500,6 +508,7 @@ bool KeyframeGraph::UpdateInliers() {
       r.inlier = inlier;
     }
   }
+  if (changed) information_ = nullptr;
   return changed;
 }
 
@@ -519,7 +528,7 @@ void KeyframeGraph::Marginalize() {
   const std::vector<Var> vars = Variables(true);
   const Layout layout = MakeLayout(vars);
   const Rows rows = Equations(layout, true, true);
-  const Eigen::MatrixXd h(rows.Matrix());
+  const Eigen::MatrixXd h = Eigen::MatrixXd(rows.Matrix()).selfadjointView<Eigen::Lower>();
   const Eigen::VectorXd& g = rows.g;
   const Keyframe& oldest = window_.front();
   // The oldest pose's and mover states' columns come first.
@@ -576,15 +585,20 @@ std::vector<KeyframeGraph::Var> KeyframeGraph::CovarianceTargets(const std::vect
   return wanted;
 }
 
+// The factorized information matrix at the solution: the last solve's, or afresh.
+std::shared_ptr<const KeyframeGraph::Factorization> KeyframeGraph::Information(const std::vector<Var>& vars,
+                                                                               const Layout& layout) const {
+  if (information_ != nullptr && information_vars_ == vars) return information_;
+  Eigen::SparseMatrix<double> identity(layout.cols, layout.cols);
+  identity.setIdentity();
+  return std::make_shared<const Factorization>(Equations(layout, false, true).Matrix() + kRidge * identity);
+}
+
 void KeyframeGraph::ComputeCovariances() {
   const std::vector<Var> vars = Variables(false);
   const Layout layout = MakeLayout(vars);
-  // A variable nothing informs (a mover's state whose only reading left the gate) gets variance
-  // 1e9 instead of making the information singular.
-  Eigen::SparseMatrix<double> identity(layout.cols, layout.cols);
-  identity.setIdentity();
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(Equations(layout, false, true).Matrix() +
-                                                                       1e-9 * identity);
+  const std::shared_ptr<const Factorization> factorization = Information(vars, layout);
+  const Factorization& information = *factorization;
   const std::vector<Var> wanted = CovarianceTargets(vars);
   std::map<Var, int> offset;  // of each wanted variable's columns in the right-hand side
   int rhs = 0;

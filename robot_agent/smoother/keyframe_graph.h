@@ -3,10 +3,12 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <memory>
 #include <set>
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
 #include "common/se2.h"
@@ -56,7 +58,10 @@ namespace mrslam::robot_agent::smoother {
 // H' = H_rr - H_rm H_mm^-1 H_mr, g' = g_r - H_rm H_mm^-1 g_m (m: the oldest pose and the moving
 // landmarks' states at it); its readings and odometry leave the window and its pose joins the
 // fixed history (Path).
-// Marginal covariances are blocks of (J^T J + H_p)^-1 at the solution (Laplace approximation):
+// Marginal covariances are blocks of (J^T J + H_p)^-1 (Laplace approximation), from the
+// factorization of the solve's last iteration (linearized where that iteration started, a step
+// of at most a few millimetres from the solution once warm-started; factorized afresh when that
+// iteration was damped or the gate changed after it):
 // the newest pose's, the correction's and the moving landmarks' at every solve, a static
 // landmark's when it is read (in between it keeps the last, which errs on the large side as
 // information only accrues).
@@ -220,7 +225,13 @@ class KeyframeGraph {
   bool UpdateInliers();
   void Marginalize();
   std::vector<Var> CovarianceTargets(const std::vector<Var>& vars) const;
+  // The information matrix (with the ridge) at the solution, factorized.
+  using Factorization = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>;
+  std::shared_ptr<const Factorization> Information(const std::vector<Var>& vars, const Layout& layout) const;
   void ComputeCovariances();
+
+  static constexpr double kRidge = 1e-9;          // added to the information's diagonal
+  static constexpr double kUsableDamping = 1e-4;  // the largest LM damping whose factorization serves
 
   double dt_s_;
   int window_keyframes_;
@@ -245,6 +256,10 @@ class KeyframeGraph {
   Eigen::Matrix<double, 6, 6> pose_correction_cov_ = Eigen::Matrix<double, 6, 6>::Zero();
   std::map<std::uint32_t, Eigen::Matrix2d> landmark_cov_;
   std::map<std::int64_t, Eigen::Matrix3d> mover_cov_;  // of each chain's newest state
+  // The information matrix of the last solve's last iteration, factorized, and its variables;
+  // null when it cannot serve the covariances.
+  std::shared_ptr<const Factorization> information_;
+  std::vector<Var> information_vars_;
 };
 
 }  // namespace mrslam::robot_agent::smoother
