@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -9,6 +10,9 @@
 // Plain sensor, truth and estimate structs shared by the pure cores. The DDS nodes convert
 // messages to and from these at the edge.
 namespace mrslam::common {
+
+// The DDS participant a sample came from (its writer's GUID prefix).
+using WriterId = std::array<std::uint8_t, 12>;
 
 struct Stamp {
   std::string robot_id;

@@ -22,6 +22,7 @@ struct AgentFlags {
   std::string filter;
   int particles = -1;
   int estimate_readers = 0;
+  bool allow_rejected = false;
 };
 
 void AddFlags(CLI::App& app, AgentFlags* flags) {
@@ -31,6 +32,8 @@ void AddFlags(CLI::App& app, AgentFlags* flags) {
   app.add_option("--particles", flags->particles, "Number of particles (overrides filter.particles)");
   app.add_option("--wait-readers", flags->estimate_readers,
                  "Before saying ready, wait until this many readers match the estimate topic");
+  app.add_flag("--allow-rejected", flags->allow_rejected,
+               "End normally even after malformed, foreign-writer, contested or beyond-horizon input");
 }
 
 int Run(AgentFlags flags) {
@@ -51,6 +54,9 @@ int Run(AgentFlags flags) {
   options.shared_memory = flags.common.shared_memory;
   options.timeout_s = scenario.run.ack_timeout_s;
   options.estimate_readers = flags.estimate_readers;
+  options.lockstep = scenario.run.mode == common::RunMode::kLockstep;
+  options.horizon_steps = static_cast<std::uint32_t>(scenario.run.horizon_steps);
+  options.allow_rejected = flags.allow_rejected;
   const auto& stop = common::InstallStopHandler();
   AgentNode node(agent, options, std::move(slam));
   return node.Run(stop) ? 0 : 130;

@@ -251,6 +251,7 @@ void ParseRun(Section& top, ScenarioOptions* o) {
     o->run.dt_s = run.Require<double>("dt_s");
   }
   o->run.ack_timeout_s = run.Get("ack_timeout_s", o->run.ack_timeout_s);
+  o->run.horizon_steps = run.Get("horizon_steps", o->run.horizon_steps);
   o->run.domain = run.Get("domain", o->run.domain);
   run.RejectUnknownKeys();
 }
@@ -563,6 +564,8 @@ void CheckRun(const ScenarioOptions& o, Checker* c) {
   c->Check(run.dt_s > 0.0 && std::isfinite(run.dt_s), "run.dt_s", run.dt_s, "must be positive");
   c->Check(run.realtime_factor > 0.0, "run.realtime_factor", run.realtime_factor, "must be positive");
   c->Check(run.ack_timeout_s > 0.0, "run.ack_timeout_s", run.ack_timeout_s, "must be positive");
+  c->Check(run.horizon_steps >= 1 && run.horizon_steps <= 1000000, "run.horizon_steps", run.horizon_steps,
+           "must be in 1..1000000");
   c->Check(run.domain >= 0 && run.domain <= 232, "run.domain", run.domain, "must be in 0..232");
   c->Check(!robots.empty(), "robots", "[]", "at least one robot is required");
 }

@@ -32,6 +32,7 @@ struct RunOptions {
   int steps = 100;
   double dt_s = 0.1;
   double ack_timeout_s = 30.0;  // lockstep: an agent silent this long aborts the run
+  int horizon_steps = 1000;     // an agent rejects samples and peer messages further ahead
   int domain = 0;               // DDS domain id
 };
 

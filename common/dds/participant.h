@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -9,6 +10,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -19,6 +21,8 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include "common/sensor_types.h"
 
 // The only DDS plumbing of the project: one participant per process built from the XML
 // profiles in config/dds_profiles.xml, and typed RAII writers and readers. Nodes use these;
@@ -148,15 +152,17 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
 
-  // Takes the oldest queued sample; waits up to timeout. False on timeout.
-  bool Take(Msg* out, std::chrono::milliseconds timeout) {
+  // Takes the oldest queued sample (and, if asked, the participant that wrote it); waits up to
+  // timeout. False on timeout.
+  bool Take(Msg* out, std::chrono::milliseconds timeout, common::WriterId* writer = nullptr) {
     std::unique_lock<std::mutex> lock(mutex_);
     if (!cv_.wait_for(lock, timeout, [this] { return !queue_.empty(); })) return false;
-    *out = std::move(queue_.front());
+    *out = std::move(queue_.front().first);
+    if (writer != nullptr) *writer = queue_.front().second;
     queue_.pop_front();
     return true;
   }
-  bool TryTake(Msg* out) { return Take(out, std::chrono::milliseconds(0)); }
+  bool TryTake(Msg* out, common::WriterId* writer = nullptr) { return Take(out, std::chrono::milliseconds(0), writer); }
   int MatchedWriters() const {
     eprosima::fastdds::dds::SubscriptionMatchedStatus s;
     reader_->get_subscription_matched_status(s);
@@ -168,9 +174,12 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
     eprosima::fastdds::dds::SampleInfo info;
     while (reader->take_next_sample(&msg, &info) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
+      common::WriterId writer{};
+      const auto& prefix = info.sample_identity.writer_guid().guidPrefix.value;
+      std::copy(std::begin(prefix), std::end(prefix), writer.begin());
       {
         std::lock_guard<std::mutex> lock(mutex_);
-        queue_.push_back(msg);
+        queue_.emplace_back(msg, writer);
       }
       cv_.notify_all();
       if (notifier_ != nullptr) notifier_->Notify();
@@ -183,7 +192,7 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;
   std::mutex mutex_;
   std::condition_variable cv_;
-  std::deque<Msg> queue_;
+  std::deque<std::pair<Msg, common::WriterId>> queue_;
 };
 
 // Topic names (docs/dds.md).

@@ -37,12 +37,9 @@ int SanitizeImu(common::ImuSamples* imu) {
   });
 }
 
-std::string StampProblem(const common::Stamp& stamp, const std::string& own_robot_id, std::uint32_t next_step) {
+std::string StampProblem(const common::Stamp& stamp, const std::string& own_robot_id) {
   if (stamp.robot_id != own_robot_id)
     return "sample for robot '" + stamp.robot_id + "' on " + own_robot_id + "'s topic";
-  if (stamp.step < next_step) {
-    return "sample of step " + std::to_string(stamp.step) + " arrived after that step was already processed";
-  }
   if (!std::isfinite(stamp.time_s)) return "sample of step " + std::to_string(stamp.step) + " has a non-finite time";
   return {};
 }

@@ -14,8 +14,8 @@ int SanitizeLidar(common::LidarScan* scan);
 int SanitizeOdometry(common::Odometry* odometry);
 int SanitizeImu(common::ImuSamples* imu);
 
-// Why a whole message is rejected before buffering: it names another robot, or a step that was
-// already processed. Empty when the stamp is acceptable.
-std::string StampProblem(const common::Stamp& stamp, const std::string& own_robot_id, std::uint32_t next_step);
+// Why a whole sample is malformed: it names another robot, or its time is not finite. Empty when
+// the stamp is acceptable (whether its step is wanted is StepSlots' to say).
+std::string StampProblem(const common::Stamp& stamp, const std::string& own_robot_id);
 
 }  // namespace mrslam::robot_agent::cooperation

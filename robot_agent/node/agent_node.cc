@@ -12,6 +12,7 @@
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
 #include "robot_agent/cooperation/cooperation.h"
+#include "robot_agent/cooperation/sample_intake.h"
 #include "robot_agent/cooperation/sample_validation.h"
 #include "robot_agent/node/msg_conversion.h"
 
@@ -60,11 +61,12 @@ struct AgentNode::Impl {
   AgentCounters counters;
   std::uint32_t next_step = 1;
   std::size_t rendezvous_logged = 0;  // rendezvous() entries logged so far
-  // Samples buffered by step until the step is complete.
-  std::map<std::uint32_t, common::LidarScan> lidar;
-  std::map<std::uint32_t, common::ImuSamples> imu;
-  std::map<std::uint32_t, common::Odometry> odometry;
+  // Samples buffered by step until the step is complete, taken only from the simulator.
+  cooperation::StepSlots<common::LidarScan> lidar;
+  cooperation::StepSlots<common::ImuSamples> imu;
+  cooperation::StepSlots<common::Odometry> odometry;
   std::map<std::uint32_t, msg::StepClock> clock;
+  cooperation::SimulatorBinding simulator;
 
   Impl(const AgentOptions& a, const AgentNodeOptions& o, std::unique_ptr<filters::SlamFilter> f)
       : agent(a),
@@ -81,44 +83,47 @@ struct AgentNode::Impl {
         relative_inbox(participant, dds::PeerTopic(a.robot_id, "relative"), &notifier),
         map_inbox(participant, dds::PeerTopic(a.robot_id, "map"), &notifier),
         moved_inbox(participant, dds::PeerTopic(a.robot_id, "moved"), &notifier),
-        cooperation(a) {}
+        cooperation(a),
+        lidar(o.horizon_steps),
+        imu(o.horizon_steps),
+        odometry(o.horizon_steps) {}
 
-  void Reject(const std::string& why) {
-    ++counters.rejected_samples;
-    spdlog::warn("rejected: {} (rejected so far: {})", why, counters.rejected_samples);
+  void Reject(cooperation::Rejection kind, const std::string& why, std::uint32_t n = 1) {
+    counters.rejected.Add(kind, n);
+    spdlog::warn("rejected ({}): {} (rejected so far: {})", cooperation::RejectionName(kind), why,
+                 counters.rejected.Describe());
   }
 
   // Buffers a sample of a future or current step, or rejects it.
   template <typename T>
-  void Buffer(T sample, std::map<std::uint32_t, T>* buffer, int (*sanitize)(T*), const char* what) {
-    if (const auto problem = cooperation::StampProblem(sample.stamp, agent.robot_id, next_step); !problem.empty()) {
-      Reject(std::string(what) + ": " + problem);
-      return;
-    }
-    if (buffer->count(sample.stamp.step) != 0) {
-      Reject(std::string(what) + ": a second sample of step " + std::to_string(sample.stamp.step));
+  void Buffer(T sample, const common::WriterId& writer, cooperation::StepSlots<T>* slots, int (*sanitize)(T*),
+              const char* what) {
+    const std::uint32_t step = sample.stamp.step;
+    if (const auto problem = cooperation::StampProblem(sample.stamp, agent.robot_id); !problem.empty()) {
+      Reject(cooperation::Rejection::kMalformed, std::string(what) + ": " + problem);
       return;
     }
     if (const int bad = sanitize(&sample); bad > 0) {
-      counters.rejected_samples += bad;
-      spdlog::warn("rejected {} malformed {} item(s) of step {}", bad, what, sample.stamp.step);
+      Reject(cooperation::Rejection::kMalformed, fmt::format("{} malformed {} item(s) of step {}", bad, what, step),
+             static_cast<std::uint32_t>(bad));
     }
-    const auto step = sample.stamp.step;
-    buffer->emplace(step, std::move(sample));
+    if (const auto kind = slots->Offer(step, next_step, writer, std::move(sample))) {
+      Reject(*kind, fmt::format("{} sample of step {} (the agent is at step {})", what, step, next_step));
+    }
   }
 
   void Drain() {
+    common::WriterId writer{};
     msg::LidarScan l;
-    while (lidar_reader.TryTake(&l)) Buffer(dds::FromMsg(l), &lidar, &cooperation::SanitizeLidar, "lidar");
+    while (lidar_reader.TryTake(&l, &writer))
+      Buffer(dds::FromMsg(l), writer, &lidar, &cooperation::SanitizeLidar, "lidar");
     msg::Imu m;
-    while (imu_reader.TryTake(&m)) Buffer(dds::FromMsg(m), &imu, &cooperation::SanitizeImu, "imu");
+    while (imu_reader.TryTake(&m, &writer)) Buffer(dds::FromMsg(m), writer, &imu, &cooperation::SanitizeImu, "imu");
     msg::Odometry od;
-    while (odometry_reader.TryTake(&od))
-      Buffer(dds::FromMsg(od), &odometry, &cooperation::SanitizeOdometry, "odometry");
+    while (odometry_reader.TryTake(&od, &writer))
+      Buffer(dds::FromMsg(od), writer, &odometry, &cooperation::SanitizeOdometry, "odometry");
     msg::StepClock c;
-    while (clock_reader.TryTake(&c)) {
-      if (c.stamp().step() >= next_step) clock[c.stamp().step()] = c;
-    }
+    while (clock_reader.TryTake(&c, &writer)) AcceptClock(c, writer);
     msg::RelativeMeasurement r;
     while (relative_inbox.TryTake(&r)) AcceptPeer(FromMsg(r), &cooperation::PeerInbox::measurements);
     msg::MapSnapshot ms;
@@ -127,35 +132,88 @@ struct AgentNode::Impl {
     while (moved_inbox.TryTake(&n)) AcceptPeer(FromMsg(n), &cooperation::PeerInbox::moved);
   }
 
+  // Keeps a step clock from the simulator (the first participant to deliver one), or rejects it.
+  void AcceptClock(const msg::StepClock& c, const common::WriterId& writer) {
+    const std::uint32_t step = c.stamp().step();
+    using cooperation::Rejection;
+    if (const auto kind = simulator.OfferClock(writer)) {
+      Reject(*kind, fmt::format("a step clock of step {} from a second participant", step));
+    } else if (step < next_step) {
+      Reject(Rejection::kStale, fmt::format("the step clock of step {} (the agent is at step {})", step, next_step));
+    } else if (step - next_step > options.horizon_steps) {
+      Reject(Rejection::kBeyondHorizon,
+             fmt::format("a step clock of step {} (the agent is at step {})", step, next_step));
+    } else if (!clock.emplace(step, c).second) {
+      Reject(Rejection::kDuplicate, fmt::format("a second step clock of step {}", step));
+    }
+  }
+
   // Buffers a peer message for the start of the step after the one it was sent in, or rejects
-  // it (not for us, unknown sender, a step already past).
+  // it (not for us, unknown sender, a step already past or beyond the horizon).
   template <typename T>
   void AcceptPeer(T message, std::vector<T> cooperation::PeerInbox::*list) {
     const auto& h = message.header;
+    using cooperation::Rejection;
     if (h.recipient != agent.robot_id) {
-      Reject("peer message for '" + h.recipient + "' in " + agent.robot_id + "'s inbox");
+      Reject(Rejection::kMalformed, "peer message for '" + h.recipient + "' in " + agent.robot_id + "'s inbox");
       return;
     }
     if (agent.TeamIndex(h.sender) < 0 || h.sender == agent.robot_id) {
-      Reject("peer message from unknown robot '" + h.sender + "'");
+      Reject(Rejection::kMalformed, "peer message from unknown robot '" + h.sender + "'");
       return;
     }
     if (h.step + 1 < next_step) {
-      Reject("stale peer message of step " + std::to_string(h.step) + " from " + h.sender);
+      Reject(Rejection::kStale, "peer message of step " + std::to_string(h.step) + " from " + h.sender);
+      return;
+    }
+    if (h.step > next_step && h.step - next_step > options.horizon_steps) {
+      Reject(Rejection::kBeyondHorizon, "peer message of step " + std::to_string(h.step) + " from " + h.sender);
       return;
     }
     ++received[{h.sender, h.step}];
     (inbox[h.step].*list).push_back(std::move(message));
   }
 
-  // True when every peer message the clock of step k announces (sent during step k-1) is here.
-  bool PeerMessagesComplete(const msg::StepClock& c) const {
+  // How many peer messages to this agent the clock of step k announces from each sender (those
+  // sent during step k-1).
+  std::map<std::string, std::uint32_t> Announced(const msg::StepClock& c) const {
+    std::map<std::string, std::uint32_t> out;
     for (const auto& d : c.peer_deliveries()) {
-      if (d.recipient_id() != agent.robot_id) continue;
-      const auto it = received.find({d.sender_id(), c.stamp().step() - 1});
-      if ((it == received.end() ? 0U : it->second) < d.count()) return false;
+      if (d.recipient_id() == agent.robot_id) out[d.sender_id()] += d.count();
+    }
+    return out;
+  }
+
+  // True when every peer message the clock of step k announces is here.
+  bool PeerMessagesComplete(const msg::StepClock& c) const {
+    for (const auto& [sender, count] : Announced(c)) {
+      const auto it = received.find({sender, c.stamp().step() - 1});
+      if ((it == received.end() ? 0U : it->second) < count) return false;
     }
     return true;
+  }
+
+  // In lockstep, peer messages of step k-1 beyond those the clock of step k announces were
+  // written by someone other than the peers the simulator counted: contested. Forgets the
+  // counts of step k-1.
+  void CheckPeerCounts(const msg::StepClock& c) {
+    const std::uint32_t sent_step = c.stamp().step() - 1;
+    const auto announced = Announced(c);
+    for (auto it = received.begin(); it != received.end();) {
+      if (it->first.second != sent_step) {
+        ++it;
+        continue;
+      }
+      const auto a = announced.find(it->first.first);
+      const std::uint32_t expected = a == announced.end() ? 0U : a->second;
+      if (options.lockstep && it->second > expected) {
+        Reject(cooperation::Rejection::kContested,
+               fmt::format("{} peer message(s) of step {} from {} where the simulator counted {}", it->second,
+                           sent_step, it->first.first, expected),
+               it->second - expected);
+      }
+      it = received.erase(it);
+    }
   }
 
   template <typename W, typename M>
@@ -199,7 +257,7 @@ struct AgentNode::Impl {
       pc.count(count);
       ack.peer_messages_sent().push_back(pc);
     }
-    ack.rejected_samples(static_cast<std::uint32_t>(counters.rejected_samples));
+    ack.rejected_samples(counters.rejected.Total());
     if (!ack_writer.Write(ack))
       throw AgentError("DDS refused to publish the acknowledgement of step " + std::to_string(step));
   }
@@ -245,8 +303,10 @@ struct AgentNode::Impl {
   // Processes the next step if all of it is here. Returns true if it did.
   bool TryProcess(bool* last) {
     const std::uint32_t k = next_step;
-    if (!clock.count(k) || !lidar.count(k) || !imu.count(k) || !odometry.count(k)) return false;
+    const auto& sim = simulator.simulator();
+    if (!sim || !clock.count(k) || !lidar.Has(k, *sim) || !imu.Has(k, *sim) || !odometry.Has(k, *sim)) return false;
     if (!PeerMessagesComplete(clock[k])) return false;
+    CheckPeerCounts(clock[k]);
     const double cpu_start_s = common::ThreadCpuSeconds();
     // Peer messages of step k-1 first, in a fixed order (sender, then sequence).
     if (auto it = inbox.find(k - 1); it != inbox.end()) {
@@ -255,8 +315,8 @@ struct AgentNode::Impl {
       const std::size_t joint_before = cooperation.joint_estimates().size();
       cooperation.Receive(it->second, filter.get());
       if (const int bad = cooperation.rejected_messages() - before; bad > 0) {
-        counters.rejected_samples += bad;
-        spdlog::warn("rejected {} peer message(s) of step {}", bad, k - 1);
+        Reject(cooperation::Rejection::kMalformed, fmt::format("{} peer message(s) of step {}", bad, k - 1),
+               static_cast<std::uint32_t>(bad));
       }
       for (std::size_t i = joint_before; i < cooperation.joint_estimates().size(); ++i) {
         const auto& t = cooperation.joint_estimates()[i];
@@ -265,12 +325,16 @@ struct AgentNode::Impl {
       }
       inbox.erase(it);
     }
-    common::SensorStep step{std::move(lidar[k]), std::move(imu[k]), std::move(odometry[k])};
+    const std::uint32_t foreign_before = counters.rejected.Of(cooperation::Rejection::kForeignWriter);
+    common::SensorStep step{lidar.Take(k, *sim, &counters.rejected), imu.Take(k, *sim, &counters.rejected),
+                            odometry.Take(k, *sim, &counters.rejected)};
+    if (const auto foreign = counters.rejected.Of(cooperation::Rejection::kForeignWriter) - foreign_before;
+        foreign > 0) {
+      spdlog::warn("rejected (foreign-writer): {} sensor sample(s) of step {} not written by the simulator", foreign,
+                   k);
+    }
     *last = clock[k].last_step();
     const double time_s = clock[k].stamp().time_s();
-    lidar.erase(k);
-    imu.erase(k);
-    odometry.erase(k);
     clock.erase(k);
     filter->Process(step);
     const filters::FilterEstimate estimate = filter->Estimate();
@@ -282,7 +346,7 @@ struct AgentNode::Impl {
     msg::Estimate m = ToMsg(estimate, agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
     m.frames_known(cooperation.frames_known());
-    m.rejected_samples(static_cast<std::uint32_t>(counters.rejected_samples));
+    m.rejected_samples(counters.rejected.Total());
     m.step_cpu_ms(step_cpu_ms);
     step_times[k] = time_s;
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
@@ -329,8 +393,12 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
         a.estimate_writer.WaitForAcknowledgments(milliseconds(5000));
         a.final_writer.WaitForAcknowledgments(milliseconds(5000));
         a.ack_writer.WaitForAcknowledgments(milliseconds(5000));
-        spdlog::info("agent {} done: {} steps, {} rejected samples", a.agent.robot_id, a.counters.steps_processed,
-                     a.counters.rejected_samples);
+        spdlog::info("agent {} done: {} steps, rejected: {}", a.agent.robot_id, a.counters.steps_processed,
+                     a.counters.rejected.Describe());
+        if (a.counters.rejected.Failing() > 0 && !a.options.allow_rejected) {
+          throw AgentError("agent " + a.agent.robot_id + " rejected " + a.counters.rejected.Describe() +
+                           " input(s): the run's numbers cannot be trusted (--allow-rejected accepts them)");
+        }
         return true;
       }
     }

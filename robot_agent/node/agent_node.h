@@ -1,10 +1,12 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
+#include "robot_agent/cooperation/sample_intake.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/options/agent_options.h"
 
@@ -23,18 +25,24 @@ struct AgentNodeOptions {
   double timeout_s = 30.0;  // no new step for this long is an error
   // Before saying "ready", wait until this many readers have matched the estimate topic.
   int estimate_readers = 0;
+  bool lockstep = true;
+  std::uint32_t horizon_steps = 1000;  // samples and peer messages further ahead are rejected
+  // Finish normally even after rejections that make the run's numbers doubtful (malformed,
+  // foreign-writer, contested, beyond-horizon); otherwise the agent ends with an AgentError.
+  bool allow_rejected = false;
 };
 
-// Counters of what the agent rejected (each also logged as a warning).
+// What the agent processed and rejected (each rejection also logged as a warning).
 struct AgentCounters {
   int steps_processed = 0;
-  int rejected_samples = 0;
+  cooperation::RejectionCounts rejected;
 };
 
 // A robot agent's DDS node: reads only its own robot's lidar, IMU and odometry topics and the
 // step clock (never the truth), runs the filter on each complete step in order, publishes its
 // estimate on mrslam/<robot>/estimate and acknowledges the step on mrslam/<robot>/ack (step 0 =
-// ready). Malformed samples are rejected and counted. Owns the participant, endpoints, filter.
+// ready). Sensor samples are taken only from the simulator (the participant that writes the step
+// clock); what is rejected is counted by kind (cooperation::Rejection). Owns the participant, endpoints, filter.
 class AgentNode {
  public:
   AgentNode(const AgentOptions& agent, const AgentNodeOptions& options, std::unique_ptr<filters::SlamFilter> filter);

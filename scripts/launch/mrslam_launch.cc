@@ -59,6 +59,7 @@ struct LaunchFlags {
   std::string seeds;  // "A..B"
   bool no_plots = false;
   double timeout_s = 0.0;
+  bool allow_rejected = false;
 };
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
@@ -101,6 +102,7 @@ class ProgressPrinter {
 RunArgs ChildArgs(const LaunchFlags& flags, const std::string& scenario_path, int domain, long long seed) {
   RunArgs run{scenario_path, domain, seed, flags.common.overrides, flags.common.shared_memory, ""};
   if (flags.log_level_given) run.log_level = flags.common.log_level;
+  run.allow_rejected = flags.allow_rejected;
   return run;
 }
 
@@ -410,6 +412,9 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
       ->required();
   app.add_option("--seeds", flags->seeds, "Run seeds A..B in turn into OUT/seed-<S>/ and write OUT/aggregate.json");
   app.add_flag("--no-plots", flags->no_plots, "Do not run plot_run.py");
+  app.add_flag("--allow-rejected", flags->allow_rejected,
+               "Let a run pass although an agent rejected malformed, foreign-writer, contested or beyond-horizon "
+               "input (stale and duplicate input never fails a run)");
   app.add_option("--timeout-s", flags->timeout_s, "Stop a run that takes longer than this (0: no limit)")
       ->check(CLI::NonNegativeNumber);
 }

@@ -22,9 +22,9 @@ void StartSimulation(ProcessSupervisor* children, const RunArgs& run, const std:
                      int estimate_readers, int truth_readers, const std::string& log_prefix) {
   for (const auto& id : robot_ids) {
     const std::string name = "robot_agent_" + id;
-    children->Start(
-        name, ChildCommand(run, "robot_agent", {"--robot", id, "--wait-readers", std::to_string(estimate_readers)}),
-        log_prefix + name + ".log");
+    std::vector<std::string> extra = {"--robot", id, "--wait-readers", std::to_string(estimate_readers)};
+    if (run.allow_rejected) extra.emplace_back("--allow-rejected");
+    children->Start(name, ChildCommand(run, "robot_agent", extra), log_prefix + name + ".log");
   }
   children->Start("world_sim", ChildCommand(run, "world_sim", {"--wait-readers", std::to_string(truth_readers)}),
                   log_prefix + "world_sim.log");

@@ -21,7 +21,8 @@ struct RunArgs {
   long long seed = 0;
   std::vector<std::string> overrides;
   bool shared_memory = false;
-  std::string log_level;  // empty: each process's default
+  std::string log_level;        // empty: each process's default
+  bool allow_rejected = false;  // the agents end normally after input that fails a run
 };
 
 // The command line of one of the run's processes: the executable beside this one, the run's

@@ -1,8 +1,13 @@
-// Multi-process: a robot_agent fed malformed samples (a NaN detection, a sample naming another
-// robot, a sample of a step already processed) rejects and counts each, and goes on.
+// Multi-process: a robot_agent rejects and counts by kind what it must not take — malformed
+// samples (a NaN detection, a sample naming another robot), stale ones (a step already
+// processed), scans written by a participant other than the simulator, a step clock from a second
+// participant — and goes on with the simulator's samples. Input that makes the run's numbers
+// doubtful ends the agent with an error naming the kind, unless --allow-rejected.
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "tests/integration/child_process.h"
 #include "tests/integration/fake_simulator.h"
@@ -26,28 +31,87 @@ common::LidarScan OneLandmark(bool with_nan_detection) {
   return scan;
 }
 
-TEST(AgentRejectsTest, MalformedSamplesAreRejectedCountedAndTheAgentGoesOn) {
-  unsetenv("MRSLAM_DOMAIN");
-  const testing::TempDir temp_dir("mrslam-rejects");
-  const std::string& dir = temp_dir.path();
+std::vector<std::string> AgentCommand(bool allow_rejected) {
+  std::vector<std::string> argv = {BinPath("robot_agent"),
+                                   "--scenario",
+                                   SourcePath("config/paper_two_robots.yaml"),
+                                   "--robot",
+                                   "r1",
+                                   "--domain",
+                                   std::to_string(kDomain),
+                                   "--particles",
+                                   "50"};
+  if (allow_rejected) argv.emplace_back("--allow-rejected");
+  return argv;
+}
+
+// Steps 1..3 with a NaN detection at step 1, then a stale scan of step 1 and an odometry sample
+// naming r2 before step 2: 2 malformed and 1 stale. Returns the agent's exit status.
+std::optional<int> RunWithMalformedSamples(bool allow_rejected, const std::string& dir) {
   dds::Participant participant({kDomain, "fake_sim", false});
   FakeSimulator sim(participant, "r1", kSteps, kDt);
-  ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot", "r1",
-                      "--domain", std::to_string(kDomain), "--particles", "50"},
-                     dir + "/agent.log");
-  ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(dir + "/agent.log");
-  ASSERT_TRUE(sim.PublishStep(1, OneLandmark(true), 1.0, 0.2));
+  ChildProcess agent(AgentCommand(allow_rejected), dir + "/agent.log");
+  EXPECT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(dir + "/agent.log");
+  EXPECT_TRUE(sim.PublishStep(1, OneLandmark(true), 1.0, 0.2));
   EXPECT_EQ(sim.WaitAck(1), 1) << testing::ReadFile(dir + "/agent.log");
-  ASSERT_TRUE(sim.PublishLidar(common::LidarScan{sim.StampOf(1), {}, {}}));  // stale
+  EXPECT_TRUE(sim.PublishLidar(common::LidarScan{sim.StampOf(1), {}, {}}));  // stale
   common::Odometry foreign;                                                  // not r1's
   foreign.stamp = {"r2", 2, 2 * kDt};
   foreign.segments.push_back({kDt, kDt, 1.0, 0.2});
-  ASSERT_TRUE(sim.PublishOdometry(foreign));
-  ASSERT_TRUE(sim.PublishStep(2, OneLandmark(false), 1.0, 0.2));
+  EXPECT_TRUE(sim.PublishOdometry(foreign));
+  EXPECT_TRUE(sim.PublishStep(2, OneLandmark(false), 1.0, 0.2));
   EXPECT_EQ(sim.WaitAck(2), 3) << testing::ReadFile(dir + "/agent.log");
-  ASSERT_TRUE(sim.PublishStep(3, OneLandmark(false), 1.0, 0.2));
+  EXPECT_TRUE(sim.PublishStep(3, OneLandmark(false), 1.0, 0.2));
   EXPECT_EQ(sim.WaitAck(3), 3);
-  EXPECT_EQ(agent.WaitExit(seconds(20)), std::optional<int>(0)) << testing::ReadFile(dir + "/agent.log");
+  return agent.WaitExit(seconds(20));
+}
+
+TEST(AgentRejectsTest, MalformedSamplesAreRejectedCountedAndFailTheRun) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-rejects");
+  const std::optional<int> status = RunWithMalformedSamples(false, temp_dir.path());
+  const std::string log = testing::ReadFile(temp_dir.path() + "/agent.log");
+  ASSERT_TRUE(status.has_value()) << log;
+  EXPECT_NE(*status, 0) << log;
+  EXPECT_NE(log.find("agent r1 rejected 2 malformed, 1 stale input(s)"), std::string::npos) << log;
+}
+
+TEST(AgentRejectsTest, WithAllowRejectedTheAgentGoesOnAndEndsNormally) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-rejects");
+  EXPECT_EQ(RunWithMalformedSamples(true, temp_dir.path()), std::optional<int>(0))
+      << testing::ReadFile(temp_dir.path() + "/agent.log");
+}
+
+// Another participant writes scans on r1's lidar topic for every step before the simulator does
+// (the spoof that used to displace the real scans): the agent takes the simulator's, counts one
+// foreign-writer rejection per step, and fails the run.
+TEST(AgentRejectsTest, ScansFromAnotherParticipantAreNotTakenAndFailTheRun) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-rejects");
+  const std::string log_path = temp_dir.path() + "/agent.log";
+  dds::Participant participant({kDomain, "fake_sim", false});
+  dds::Participant outsider_participant({kDomain, "outsider", false});
+  FakeSimulator sim(participant, "r1", kSteps, kDt);
+  FakeSimulator outsider(outsider_participant, "r1", kSteps, kDt);
+  ChildProcess agent(AgentCommand(false), log_path);
+  ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(log_path);
+  for (std::uint32_t k = 1; k <= kSteps; ++k) {
+    common::LidarScan forged = OneLandmark(false);
+    forged.stamp = outsider.StampOf(k);
+    forged.landmarks.push_back({forged.stamp.time_s, 7.0, -1.0, -1});
+    ASSERT_TRUE(outsider.PublishLidar(forged));
+  }
+  ASSERT_TRUE(outsider.WaitLidarDelivered());
+  for (std::uint32_t k = 1; k <= kSteps; ++k) {
+    ASSERT_TRUE(sim.PublishStep(k, OneLandmark(false), 1.0, 0.2));
+    EXPECT_EQ(sim.WaitAck(k), static_cast<int>(k)) << testing::ReadFile(log_path);
+  }
+  const std::optional<int> status = agent.WaitExit(seconds(20));
+  const std::string log = testing::ReadFile(log_path);
+  ASSERT_TRUE(status.has_value()) << log;
+  EXPECT_NE(*status, 0) << log;
+  EXPECT_NE(log.find("rejected 3 foreign-writer input(s)"), std::string::npos) << log;
 }
 
 }  // namespace

@@ -54,6 +54,8 @@ class FakeSimulator {
     return clock_.Write(c) && ok;
   }
   bool PublishLidar(const common::LidarScan& scan) { return lidar_.Write(dds::ToMsg(scan)); }
+  // Waits until every reader has acknowledged the scans written so far.
+  bool WaitLidarDelivered() { return lidar_.WaitForAcknowledgments(std::chrono::seconds(20)); }
   bool PublishOdometry(const common::Odometry& odometry) { return odometry_.Write(dds::ToMsg(odometry)); }
 
   // Waits for the agent's acknowledgement of step k; returns its rejected-sample count (-1 on
