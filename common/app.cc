@@ -1,7 +1,10 @@
 #include "common/app.h"
 
+#include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <iostream>
+#include <limits>
 
 #include <spdlog/spdlog.h>
 
@@ -14,11 +17,27 @@ extern "C" void OnStopSignal(int /*signal*/) { g_stop = true; }
 
 void AddCommonFlags(CLI::App& app, CommonFlags* flags) {
   app.add_option("--scenario", flags->scenario, "Scenario YAML file")->required()->check(CLI::ExistingFile);
-  app.add_option("--domain", flags->domain, "DDS domain id (0..232); MRSLAM_DOMAIN overrides it");
-  app.add_option("--seed", flags->seed, "Run seed (overrides the scenario's 'seed')");
+  app.add_option("--domain", flags->domain, "DDS domain id (0..232); MRSLAM_DOMAIN overrides it")
+      ->check(CLI::Range(0, 232));
+  app.add_option("--seed", flags->seed, "Run seed (overrides the scenario's 'seed')")
+      ->check(CLI::Range(0LL, std::numeric_limits<long long>::max()));
   app.add_option("--set", flags->overrides, "Override a scenario key: key.path=value (repeatable)");
   app.add_flag("--shm", flags->shared_memory, "Use the shared-memory transport besides UDPv4");
-  app.add_option("--log-level", flags->log_level, "trace, debug, info, warn or error");
+  app.add_option("--log-level", flags->log_level, "trace, debug, info, warn, error, critical or off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+}
+
+CLI::Validator FiniteNonNegative() {
+  return CLI::Validator(
+      [](const std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v < 0.0) {
+          return "'" + text + "' is not a finite number >= 0";
+        }
+        return {};
+      },
+      "FINITE >= 0");
 }
 
 const std::atomic<bool>& InstallStopHandler() {
@@ -31,6 +50,13 @@ namespace {
 
 int ParseAndRun(const std::string& name, CLI::App& app, int argc, char** argv,
                 const std::function<int(const CLI::App&)>& body) {
+  if (const auto status = ParseCommandLine(name, app, argc, argv)) return *status;
+  return body(app);
+}
+
+}  // namespace
+
+std::optional<int> ParseCommandLine(const std::string& name, CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -39,10 +65,8 @@ int ParseAndRun(const std::string& name, CLI::App& app, int argc, char** argv,
     std::cerr << name << ": error: " << e.what() << " (see --help)\n";
     return 2;
   }
-  return body(app);
+  return std::nullopt;
 }
-
-}  // namespace
 
 int RunMain(const std::string& name, const std::string& description, int argc, char** argv,
             const std::function<void(CLI::App&)>& add_flags, const std::function<int(const CLI::App&)>& body) {

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,13 @@ struct CommonFlags {
 };
 
 void AddCommonFlags(CLI::App& app, CommonFlags* flags);
+
+// Parses the command line: std::nullopt when it is good; else the exit code, after the help
+// (--help) or one line "<name>: error: <what> (see --help)" on stderr.
+std::optional<int> ParseCommandLine(const std::string& name, CLI::App& app, int argc, char** argv);
+
+// A flag's value that must be a finite number >= 0 (CLI11's NonNegativeNumber lets NaN through).
+CLI::Validator FiniteNonNegative();
 
 // The flag SIGINT and SIGTERM set (installed once).
 const std::atomic<bool>& InstallStopHandler();

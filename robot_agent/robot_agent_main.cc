@@ -28,10 +28,13 @@ struct AgentFlags {
 void AddFlags(CLI::App& app, AgentFlags* flags) {
   common::AddCommonFlags(app, &flags->common);
   app.add_option("--robot", flags->robot_id, "Robot id from the scenario (e.g. r1)")->required();
-  app.add_option("--filter", flags->filter, "fastslam, ekf, ekf_ela or smoother (overrides filter.type)");
-  app.add_option("--particles", flags->particles, "Number of particles (overrides filter.particles)");
+  app.add_option("--filter", flags->filter, "fastslam, ekf, ekf_ela or smoother (overrides filter.type)")
+      ->check(CLI::IsMember({"fastslam", "ekf", "ekf_ela", "smoother"}));
+  app.add_option("--particles", flags->particles, "Number of particles (overrides filter.particles)")
+      ->check(CLI::Range(1, 1000000));
   app.add_option("--wait-readers", flags->estimate_readers,
-                 "Before saying ready, wait until this many readers match the estimate topic");
+                 "Before saying ready, wait until this many readers match the estimate topic")
+      ->check(CLI::Range(0, 1000));
   app.add_flag("--allow-rejected", flags->allow_rejected,
                "End normally even after malformed, foreign-writer, contested or beyond-horizon input");
 }

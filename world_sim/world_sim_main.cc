@@ -25,9 +25,10 @@ struct SimFlags {
 
 void AddFlags(CLI::App& app, SimFlags* flags) {
   common::AddCommonFlags(app, &flags->common);
-  app.add_option("--steps", flags->steps, "Number of steps (overrides run.steps)");
+  app.add_option("--steps", flags->steps, "Number of steps (overrides run.steps)")->check(CLI::Range(1, 10000000));
   app.add_option("--wait-readers", flags->truth_readers,
-                 "Before step 1, wait until this many readers (the evaluator) match the truth topic");
+                 "Before step 1, wait until this many readers (the evaluator) match the truth topic")
+      ->check(CLI::Range(0, 1000));
   app.add_option("--agents", flags->agents,
                  "Comma-separated agents in the lockstep barrier: 'all' (default) or 'none'");
 }

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <regex>
 #include <set>
@@ -527,6 +529,42 @@ class Checker {
   bool failed_ = false;
 };
 
+// Bounds on sizes, checked before anything is allocated or looped over by them.
+constexpr std::size_t kMaxRobots = 64;
+constexpr std::size_t kMaxLandmarks = 100000;
+constexpr int kMaxSteps = 10000000;
+constexpr std::size_t kMaxNameBytes = 128;
+constexpr std::size_t kMaxRobotIdBytes = 32;
+
+// True for well-formed UTF-8 (no overlong forms, surrogates or code points past U+10FFFF) without
+// control characters.
+bool ValidUtf8(const std::string& text) {
+  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned char b = s[i];
+    if (b < 0x80) {
+      if (b < 0x20 || b == 0x7f) return false;
+      ++i;
+      continue;
+    }
+    const std::size_t extra = b >= 0xf0 ? 3 : b >= 0xe0 ? 2 : b >= 0xc0 ? 1 : 0;
+    if (extra == 0 || b > 0xf4 || i + extra >= n) return false;
+    std::uint32_t cp = b & (0x3fU >> extra);
+    for (std::size_t k = 1; k <= extra; ++k) {
+      if ((s[i + k] & 0xc0) != 0x80) return false;
+      cp = (cp << 6) | (s[i + k] & 0x3fU);
+    }
+    constexpr std::uint32_t kMinOfLength[] = {0, 0x80, 0x800, 0x10000};
+    const bool overlong = cp < kMinOfLength[extra];
+    const bool surrogate = cp >= 0xd800 && cp <= 0xdfff;
+    const bool c1_control = cp >= 0x80 && cp < 0xa0;
+    if (overlong || surrogate || c1_control || cp > 0x10ffff) return false;
+    i += extra + 1;
+  }
+  return true;
+}
+
 bool Finite(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.heading); }
 std::string PoseText(const Pose2& p) {
   std::ostringstream s;
@@ -545,6 +583,8 @@ void CheckRun(const ScenarioOptions& o, Checker* c) {
   const auto& run = o.run;
   const auto& robots = o.robots;
   c->Check(!name.empty(), "name", "''", "must not be empty");
+  c->Check(name.size() <= kMaxNameBytes && ValidUtf8(name), "name", "(not shown)",
+           "must be valid UTF-8 of at most 128 bytes without control characters");
   if (replay.enabled) {
     c->Check(!replay.dir.empty(), "replay.dir", "''", "must not be empty");
     c->Check(replay.step_s > 0.0 && std::isfinite(replay.step_s), "replay.step_s", replay.step_s, "must be positive");
@@ -560,7 +600,7 @@ void CheckRun(const ScenarioOptions& o, Checker* c) {
                "a replayed robot must be named r<n> (MRCLAM subject n)");
     }
   }
-  c->Check(run.steps >= 1, "run.steps", run.steps, "must be at least 1");
+  c->Check(run.steps >= 1 && run.steps <= kMaxSteps, "run.steps", run.steps, "must be in 1..10000000");
   c->Check(run.dt_s > 0.0 && std::isfinite(run.dt_s), "run.dt_s", run.dt_s, "must be positive");
   c->Check(run.realtime_factor > 0.0, "run.realtime_factor", run.realtime_factor, "must be positive");
   c->Check(run.ack_timeout_s > 0.0, "run.ack_timeout_s", run.ack_timeout_s, "must be positive");
@@ -568,6 +608,7 @@ void CheckRun(const ScenarioOptions& o, Checker* c) {
            "must be in 1..1000000");
   c->Check(run.domain >= 0 && run.domain <= 232, "run.domain", run.domain, "must be in 0..232");
   c->Check(!robots.empty(), "robots", "[]", "at least one robot is required");
+  c->Check(robots.size() <= kMaxRobots, "robots", robots.size(), "at most 64 robots (one process each)");
 }
 
 // The robots: ids, poses, controls, slips.
@@ -579,7 +620,11 @@ void CheckRobots(const ScenarioOptions& o, Checker* c) {
     const auto& r = robots[i];
     const std::string p = "robots." + std::to_string(i);
     c->Check(!r.id.empty(), p + ".id", "''", "must not be empty");
-    c->Check(r.id.find_first_of(" /.\t") == std::string::npos, p + ".id", r.id, "must not contain spaces, '/' or '.'");
+    c->Check(r.id.size() <= kMaxRobotIdBytes &&
+                 r.id.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") ==
+                     std::string::npos,
+             p + ".id", r.id.size() <= kMaxRobotIdBytes && ValidUtf8(r.id) ? r.id : "(not shown)",
+             "at most 32 letters, digits, '_' or '-' (it names DDS topics)");
     c->Check(r.id != "world", p + ".id", r.id, "'world' is reserved");
     c->Check(robot_ids.insert(r.id).second, p + ".id", r.id, "duplicate robot id");
     c->Check(Finite(r.initial_pose), p + ".pose", PoseText(r.initial_pose), "must be finite");
@@ -613,6 +658,7 @@ void CheckLandmarks(const ScenarioOptions& o, Checker* c) {
   const auto& landmarks = o.landmarks;
   const auto& landmark_field = o.landmark_field;
   std::set<int> landmark_ids;
+  if (!c->Check(landmarks.size() <= kMaxLandmarks, "landmarks", landmarks.size(), "at most 100000 landmarks")) return;
   for (std::size_t i = 0; i < landmarks.size(); ++i) {
     const auto& l = landmarks[i];
     const std::string p = "landmarks." + std::to_string(i);
@@ -627,7 +673,9 @@ void CheckLandmarks(const ScenarioOptions& o, Checker* c) {
   }
   if (landmark_field.enabled) {
     const auto& f = landmark_field;
-    c->Check(f.count >= 1, "landmark_field.count", f.count, "must be at least 1");
+    if (!c->Check(f.count >= 1 && static_cast<std::size_t>(f.count) <= kMaxLandmarks, "landmark_field.count", f.count,
+                  "must be in 1..100000"))
+      return;
     c->Check(f.area_m[2] > f.area_m[0] && f.area_m[3] > f.area_m[1], "landmark_field.area_m", f.area_m.transpose(),
              "x_max > x_min and y_max > y_min");
     c->Check(f.jitter_m >= 0.0, "landmark_field.jitter_m", f.jitter_m, "must not be negative");
@@ -636,10 +684,12 @@ void CheckLandmarks(const ScenarioOptions& o, Checker* c) {
     c->Check(f.speed_mps >= 0.0, "landmark_field.speed_mps", f.speed_mps, "must not be negative");
     c->Check(f.reverse_every_steps >= 1, "landmark_field.reverse_every_steps", f.reverse_every_steps,
              "must be at least 1");
-    for (int k = 0; k < f.count; ++k) {
-      c->Check(landmark_ids.count(f.first_id + k) == 0, "landmark_field.first_id", f.first_id,
-               "generated ids collide with the ids of 'landmarks'");
-    }
+    const auto first_listed_at_or_after = landmark_ids.lower_bound(f.first_id);
+    c->Check(f.first_id >= 0 && f.first_id <= std::numeric_limits<int>::max() - f.count, "landmark_field.first_id",
+             f.first_id, "must be in 0..2147483647 - count");
+    c->Check(first_listed_at_or_after == landmark_ids.end() ||
+                 static_cast<long long>(*first_listed_at_or_after) >= static_cast<long long>(f.first_id) + f.count,
+             "landmark_field.first_id", f.first_id, "generated ids collide with the ids of 'landmarks'");
   }
 }
 
@@ -863,6 +913,25 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment) {
   }
 }
 
+namespace {
+
+// Throws for a mapping that names a key twice (YAML forbids it; yaml-cpp would keep the first).
+void RejectDuplicateKeys(const YAML::Node& node, const std::string& path) {
+  const auto child_path = [&](const std::string& key) { return path.empty() ? key : path + "." + key; };
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) RejectDuplicateKeys(node[i], child_path(std::to_string(i)));
+  } else if (node.IsMap()) {
+    std::set<std::string> keys;
+    for (const auto& entry : node) {
+      const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "(a non-scalar key)";
+      if (!keys.insert(key).second) throw ScenarioError("scenario key '" + child_path(key) + "' appears twice");
+      RejectDuplicateKeys(entry.second, child_path(key));
+    }
+  }
+}
+
+}  // namespace
+
 ScenarioOptions LoadScenario(const std::string& path, const std::vector<std::string>& overrides) {
   std::ifstream in(path);
   if (!in) throw ScenarioError("cannot open scenario file '" + path + "'");
@@ -872,6 +941,7 @@ ScenarioOptions LoadScenario(const std::string& path, const std::vector<std::str
   } catch (const YAML::Exception& e) {
     throw ScenarioError("scenario file '" + path + "' is not valid YAML: " + e.what());
   }
+  RejectDuplicateKeys(root, "");
   for (const auto& o : overrides) ApplyOverride(root, o);
   ScenarioOptions options = CreateScenarioOptions(root);
   // A relative replay.dir from the file is relative to the file's folder; one given by an

@@ -28,6 +28,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "common/app.h"
 #include "common/config/scenario_options.h"
 #include "common/parallel_for.h"
 #include "common/progress_line.h"
@@ -177,11 +178,7 @@ int Main(int argc, char** argv) {
   bool multi_process = false;
   app.add_flag("--multi-process", multi_process,
                "Run every job as separate processes (world_sim + robot_agent per robot, over DDS), one at a time");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto status = common::ParseCommandLine("mrslam_grid", app, argc, argv)) return *status;
   common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);
   if (!options.landmark_field.enabled) throw std::runtime_error(scenario_path + " has no landmark_field");
   options.filter.particles = particles;

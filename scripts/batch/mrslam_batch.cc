@@ -22,6 +22,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "common/app.h"
 #include "common/config/scenario_options.h"
 #include "common/seed_range.h"
 #include "scripts/batch/filter_accuracy.h"
@@ -58,11 +59,7 @@ int Main(int argc, char** argv) {
                "Print instead whether each slipping robot's filter recovers from its first slip (robots[].slips), "
                "against the same seed without the slips");
   app.add_option("--json", json_path, "Write medians, 90th percentiles and per-seed values here");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto status = common::ParseCommandLine("mrslam_batch", app, argc, argv)) return *status;
 
   const common::SeedRange seeds = common::ParseSeedRange("--seeds", seeds_text);
   common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);

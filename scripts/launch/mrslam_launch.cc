@@ -416,7 +416,7 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
                "Let a run pass although an agent rejected malformed, foreign-writer, contested or beyond-horizon "
                "input (stale and duplicate input never fails a run)");
   app.add_option("--timeout-s", flags->timeout_s, "Stop a run that takes longer than this (0: no limit)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(common::FiniteNonNegative());
 }
 
 }  // namespace
