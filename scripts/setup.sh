@@ -9,7 +9,7 @@ packages=(
   libyaml-cpp-dev libspdlog-dev libeigen3-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-matplotlib
-  iproute2 procps clang-format clang-tidy
+  iproute2 procps clang-format clang-tidy clang libclang-rt-14-dev
 )
 
 missing=()

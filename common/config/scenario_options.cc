@@ -915,7 +915,8 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment) {
 
 namespace {
 
-// Throws for a mapping that names a key twice (YAML forbids it; yaml-cpp would keep the first).
+// Throws for a mapping that names a key twice (YAML forbids it; yaml-cpp would keep the first)
+// or whose key is not a plain name (a list or a mapping as a key).
 void RejectDuplicateKeys(const YAML::Node& node, const std::string& path) {
   const auto child_path = [&](const std::string& key) { return path.empty() ? key : path + "." + key; };
   if (node.IsSequence()) {
@@ -923,25 +924,44 @@ void RejectDuplicateKeys(const YAML::Node& node, const std::string& path) {
   } else if (node.IsMap()) {
     std::set<std::string> keys;
     for (const auto& entry : node) {
-      const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "(a non-scalar key)";
+      if (!entry.first.IsScalar()) {
+        throw ScenarioError("scenario key '" + (path.empty() ? std::string("(top level)") : path) +
+                            "' holds a key that is not a plain name");
+      }
+      const std::string key = entry.first.Scalar();
       if (!keys.insert(key).second) throw ScenarioError("scenario key '" + child_path(key) + "' appears twice");
       RejectDuplicateKeys(entry.second, child_path(key));
     }
   }
 }
 
+// The document of a scenario, without duplicate keys; `source` names it in errors.
+template <typename Input>
+YAML::Node ParseDocument(Input& input, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(input);
+  } catch (const YAML::Exception& e) {
+    throw ScenarioError(source + " is not valid YAML: " + e.what());
+  }
+  RejectDuplicateKeys(root, "");
+  return root;
+}
+
 }  // namespace
+
+ScenarioOptions ParseScenario(const std::string& yaml_text) {
+  const YAML::Node root = ParseDocument(yaml_text, "the scenario");
+  ScenarioOptions options = CreateScenarioOptions(root);
+  std::string error;
+  if (!options.IsValid(&error)) throw ScenarioError(error);
+  return options;
+}
 
 ScenarioOptions LoadScenario(const std::string& path, const std::vector<std::string>& overrides) {
   std::ifstream in(path);
   if (!in) throw ScenarioError("cannot open scenario file '" + path + "'");
-  YAML::Node root;
-  try {
-    root = YAML::Load(in);
-  } catch (const YAML::Exception& e) {
-    throw ScenarioError("scenario file '" + path + "' is not valid YAML: " + e.what());
-  }
-  RejectDuplicateKeys(root, "");
+  YAML::Node root = ParseDocument(in, "scenario file '" + path + "'");
   for (const auto& o : overrides) ApplyOverride(root, o);
   ScenarioOptions options = CreateScenarioOptions(root);
   // A relative replay.dir from the file is relative to the file's folder; one given by an

@@ -146,4 +146,8 @@ void ApplyOverride(YAML::Node& root, const std::string& assignment);
 // one-line reason.
 ScenarioOptions LoadScenario(const std::string& path, const std::vector<std::string>& overrides);
 
+// Parses and validates a scenario given as YAML text (a relative replay.dir is left as written).
+// Throws ScenarioError with a one-line reason, whatever the text.
+ScenarioOptions ParseScenario(const std::string& yaml_text);
+
 }  // namespace mrslam::common

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -93,6 +94,15 @@ TEST_P(BadScenarioTest, IsRejectedNamingTheKey) {
 INSTANTIATE_TEST_SUITE_P(Bad, BadScenarioTest, ::testing::ValuesIn(YamlFiles("tests/common/bad_scenarios")), TestName);
 
 TEST(BadScenarioTest, CoverAtLeastTwelveFaults) { EXPECT_GE(YamlFiles("tests/common/bad_scenarios").size(), 12u); }
+
+TEST(ParseScenarioTest, ParsesTextAndRejectsAnyBadTextWithAScenarioError) {
+  std::ifstream in(SourceDir() + "/tests/common/minimal_scenario.yaml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(ParseScenario(text).robots.size(), 2U);
+  EXPECT_THROW(ParseScenario("{[a]: 1}"), ScenarioError);  // a list as a key
+  EXPECT_THROW(ParseScenario("name: [unclosed"), ScenarioError);
+  EXPECT_THROW(ParseScenario(""), ScenarioError);
+}
 
 // Each bad file is this one with one fault, so the fault is what gets rejected.
 TEST(BadScenarioTest, TheirBaseIsValid) {

@@ -21,7 +21,10 @@ using testing::ChildProcess;
 using testing::FakeSimulator;
 using testing::SourcePath;
 
-constexpr int kDomain = 115;
+// Each test on a DDS domain of its own (ctest runs them in parallel).
+constexpr int kMalformedDomain = 141;
+constexpr int kAllowedDomain = 142;
+constexpr int kForeignDomain = 143;
 constexpr std::uint32_t kSteps = 3;
 constexpr double kDt = 0.65;
 
@@ -31,14 +34,14 @@ common::LidarScan OneLandmark(bool with_nan_detection) {
   return scan;
 }
 
-std::vector<std::string> AgentCommand(bool allow_rejected) {
+std::vector<std::string> AgentCommand(int domain, bool allow_rejected) {
   std::vector<std::string> argv = {BinPath("robot_agent"),
                                    "--scenario",
                                    SourcePath("config/paper_two_robots.yaml"),
                                    "--robot",
                                    "r1",
                                    "--domain",
-                                   std::to_string(kDomain),
+                                   std::to_string(domain),
                                    "--particles",
                                    "50"};
   if (allow_rejected) argv.emplace_back("--allow-rejected");
@@ -47,10 +50,10 @@ std::vector<std::string> AgentCommand(bool allow_rejected) {
 
 // Steps 1..3 with a NaN detection at step 1, then a stale scan of step 1 and an odometry sample
 // naming r2 before step 2: 2 malformed and 1 stale. Returns the agent's exit status.
-std::optional<int> RunWithMalformedSamples(bool allow_rejected, const std::string& dir) {
-  dds::Participant participant({kDomain, "fake_sim", false});
+std::optional<int> RunWithMalformedSamples(int domain, bool allow_rejected, const std::string& dir) {
+  dds::Participant participant({domain, "fake_sim", false});
   FakeSimulator sim(participant, "r1", kSteps, kDt);
-  ChildProcess agent(AgentCommand(allow_rejected), dir + "/agent.log");
+  ChildProcess agent(AgentCommand(domain, allow_rejected), dir + "/agent.log");
   EXPECT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(dir + "/agent.log");
   EXPECT_TRUE(sim.PublishStep(1, OneLandmark(true), 1.0, 0.2));
   EXPECT_EQ(sim.WaitAck(1), 1) << testing::ReadFile(dir + "/agent.log");
@@ -69,7 +72,7 @@ std::optional<int> RunWithMalformedSamples(bool allow_rejected, const std::strin
 TEST(AgentRejectsTest, MalformedSamplesAreRejectedCountedAndFailTheRun) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-rejects");
-  const std::optional<int> status = RunWithMalformedSamples(false, temp_dir.path());
+  const std::optional<int> status = RunWithMalformedSamples(kMalformedDomain, false, temp_dir.path());
   const std::string log = testing::ReadFile(temp_dir.path() + "/agent.log");
   ASSERT_TRUE(status.has_value()) << log;
   EXPECT_NE(*status, 0) << log;
@@ -79,7 +82,7 @@ TEST(AgentRejectsTest, MalformedSamplesAreRejectedCountedAndFailTheRun) {
 TEST(AgentRejectsTest, WithAllowRejectedTheAgentGoesOnAndEndsNormally) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-rejects");
-  EXPECT_EQ(RunWithMalformedSamples(true, temp_dir.path()), std::optional<int>(0))
+  EXPECT_EQ(RunWithMalformedSamples(kAllowedDomain, true, temp_dir.path()), std::optional<int>(0))
       << testing::ReadFile(temp_dir.path() + "/agent.log");
 }
 
@@ -90,11 +93,11 @@ TEST(AgentRejectsTest, ScansFromAnotherParticipantAreNotTakenAndFailTheRun) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-rejects");
   const std::string log_path = temp_dir.path() + "/agent.log";
-  dds::Participant participant({kDomain, "fake_sim", false});
-  dds::Participant outsider_participant({kDomain, "outsider", false});
+  dds::Participant participant({kForeignDomain, "fake_sim", false});
+  dds::Participant outsider_participant({kForeignDomain, "outsider", false});
   FakeSimulator sim(participant, "r1", kSteps, kDt);
   FakeSimulator outsider(outsider_participant, "r1", kSteps, kDt);
-  ChildProcess agent(AgentCommand(false), log_path);
+  ChildProcess agent(AgentCommand(kForeignDomain, false), log_path);
   ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(log_path);
   for (std::uint32_t k = 1; k <= kSteps; ++k) {
     common::LidarScan forged = OneLandmark(false);
