@@ -7,7 +7,7 @@
 const COLORS = ['#d62728', '#1f77b4', '#2ca02c', '#9467bd', '#ff7f0e', '#8c564b', '#e377c2', '#17becf'];
 const ROBOT_RADIUS_PX = 6;
 
-const view = { mode: null, header: null, step: null, frame: 'world', stepsSeen: [], drawn: {}, ended: false };
+const view = { mode: null, header: null, step: null, frame: 'world', drawn: {}, ended: false };
 window.mrslamView = view;
 const records = new Map();  // step -> the step's record (evaluator::ViewStep)
 
@@ -143,12 +143,13 @@ function drawEstimatePose(ctx, proj, pose, color) {
   ctx.arc(px, py, ROBOT_RADIUS_PX, 0, 2 * Math.PI);
   ctx.fillStyle = color;
   ctx.fill();
-  return [px, py];
 }
 
 // The records up to the shown step, in step order.
 function recordsUpTo(step) { return sortedSteps().filter((s) => s <= step).map((s) => records.get(s)); }
 
+// A robot's paths, true pose and estimate ellipse; its estimate's disc comes last (drawDisc), so
+// that nothing covers it.
 function drawRobot(ctx, proj, rec, past, id) {
   const color = colorOf(id), estimate = rec.estimates[id];
   drawPath(ctx, proj, past.map((r) => truthPose(r, id)).filter((p) => p), color, true);
@@ -157,16 +158,19 @@ function drawRobot(ctx, proj, rec, past, id) {
   const truth = truthPose(rec, id);
   if (truth) {
     drawTruePose(ctx, proj, truth, color);
-    drawn.truth = { x: truth[0], y: truth[1], heading: truth[2], px: proj.toPx(truth)[0], py: proj.toPx(truth)[1] };
+    const [px, py] = proj.toPx(truth);
+    drawn.truth = { x: truth[0], y: truth[1], heading: truth[2], px, py };
   }
   if (estimate) {
     const pose = estimatePose(rec, id);
-    const t = displayFromRobot(id);
-    drawEllipse(ctx, proj, pose, estimate.cov, t[2], color);
-    const [px, py] = drawEstimatePose(ctx, proj, pose, color);
+    drawEllipse(ctx, proj, pose, estimate.cov, displayFromRobot(id)[2], color);
+    const [px, py] = proj.toPx(pose);
     drawn.estimate = { x: pose[0], y: pose[1], heading: pose[2], px, py, step: estimate.step };
   }
   return drawn;
+}
+function drawDisc(ctx, proj, rec, id) {
+  if (rec.estimates[id]) drawEstimatePose(ctx, proj, estimatePose(rec, id), colorOf(id));
 }
 
 function renderMap(rec) {
@@ -186,6 +190,7 @@ function renderMap(rec) {
   }
   view.drawn = {};
   for (const { id } of view.header.robots) view.drawn[id] = drawRobot(ctx, proj, rec, past, id);
+  for (const { id } of view.header.robots) drawDisc(ctx, proj, rec, id);
 }
 
 // ---- the panels: position error over time, rejected samples, frames and rendezvous --------
@@ -262,7 +267,6 @@ function startLive() {
   events.onmessage = (message) => {
     const rec = JSON.parse(message.data);
     records.set(rec.step, rec);
-    view.stepsSeen.push(rec.step);
     view.step = rec.step;
     view.ended = rec.step >= view.header.steps;
     render();
