@@ -10,7 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-matplotlib
   iproute2 procps clang-format clang-tidy
-  libcpp-httplib-dev chromium chromium-driver
+  libcpp-httplib-dev chromium chromium-driver cyclonedds-dev cyclonedds-tools
 )
 
 missing=()
