@@ -65,15 +65,20 @@ function projection(canvas) {
 }
 
 // ---- drawing -------------------------------------------------------------------------------
-// 2-sigma ellipse of a 2x2 covariance [xx, xy, yy] given in a frame rotated by `rotation` in D.
-function drawEllipse(ctx, proj, center, cov, rotation, color) {
+// The half axes (standard deviations) of a 2x2 covariance [xx, xy, yy, ...], major first, and
+// the major axis's angle.
+function axes(cov) {
   const [a, b, c] = cov;
   const mean = (a + c) / 2, diff = Math.sqrt(((a - c) / 2) ** 2 + b * b);
-  const l1 = Math.max(mean + diff, 0), l2 = Math.max(mean - diff, 0);
-  const angle = 0.5 * Math.atan2(2 * b, a - c) + rotation;
+  return [Math.sqrt(Math.max(mean + diff, 0)), Math.sqrt(Math.max(mean - diff, 0)), 0.5 * Math.atan2(2 * b, a - c)];
+}
+function twoSigmaMajor(cov) { return 2 * axes(cov)[0]; }
+// 2-sigma ellipse of a 2x2 covariance [xx, xy, yy] given in a frame rotated by `rotation` in D.
+function drawEllipse(ctx, proj, center, cov, rotation, color) {
+  const [major, minor, angle] = axes(cov);
   const [px, py] = proj.toPx(center);
   ctx.beginPath();
-  ctx.ellipse(px, py, 2 * Math.sqrt(l1) * proj.scale + 0.5, 2 * Math.sqrt(l2) * proj.scale + 0.5, -angle, 0, 2 * Math.PI);
+  ctx.ellipse(px, py, 2 * major * proj.scale + 0.5, 2 * minor * proj.scale + 0.5, -(angle + rotation), 0, 2 * Math.PI);
   ctx.strokeStyle = color;
   ctx.lineWidth = 1;
   ctx.stroke();
@@ -238,9 +243,9 @@ function renderPanels(rec) {
   for (const { id } of view.header.robots) {
     const panel = panelOf(id), e = rec.estimates[id], series = errorSeries(id, past);
     const last = series.length ? series[series.length - 1][1] : null;
-    const sigma = e ? 2 * Math.sqrt(Math.max(e.cov[0] + e.cov[2], 0)) : null;
+    const sigma = e ? twoSigmaMajor(e.cov) : null;
     panel.querySelector('.error').textContent =
-      last === null ? 'position error -' : `position error ${last.toFixed(3)} m (2-sigma ${sigma.toFixed(3)} m)`;
+      last === null ? 'position error -' : `position error ${last.toFixed(3)} m (2-sigma up to ${sigma.toFixed(3)} m)`;
     drawSparkline(panel.querySelector('canvas'), series, colorOf(id));
     panel.querySelector('.rejected').textContent = `rejected samples ${e ? e.rejected : '-'}`;
     panel.querySelector('.frames').textContent = `frames known: ${e && e.frames_known.length ? e.frames_known.join(', ') : 'none'}`;
@@ -261,11 +266,20 @@ function render() {
 // ---- data: live (Server-Sent Events) or replay ---------------------------------------------
 function setStatus(text) { document.getElementById('status').textContent = text; }
 
+// A live run's past frames keep only what the paths and error plots need (the poses), so that a
+// long run does not fill the browser's memory with maps and scans.
+function compact(rec) {
+  delete rec.lidar;
+  if (rec.truth) rec.truth.landmarks = [];
+  for (const e of Object.values(rec.estimates)) e.landmarks = [];
+}
+
 function startLive() {
   const events = new EventSource('/events');
   events.onopen = () => setStatus('live');
   events.onmessage = (message) => {
     const rec = JSON.parse(message.data);
+    if (records.has(view.step) && view.step !== rec.step) compact(records.get(view.step));
     records.set(rec.step, rec);
     view.step = rec.step;
     view.ended = rec.step >= view.header.steps;
