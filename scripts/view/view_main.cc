@@ -21,7 +21,7 @@ namespace {
 
 constexpr char kName[] = "mrslam_view";
 constexpr int kDefaultPort = 8765;
-// The feed builds at most this many frames per second, and each client gets at most as many.
+// The feed builds a frame at most once per period, and each client gets one at most as often.
 constexpr auto kFramePeriod = std::chrono::milliseconds(100);
 
 struct ViewFlags {
