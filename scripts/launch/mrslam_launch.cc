@@ -29,6 +29,7 @@
 #include "scripts/launch/process_supervisor.h"
 #include "scripts/launch/progress_monitor.h"
 #include "scripts/launch/run_report.h"
+#include "scripts/launch/run_viewer.h"
 #include "scripts/launch/simulation_run.h"
 
 namespace mrslam::launch {
@@ -60,6 +61,7 @@ struct LaunchFlags {
   bool no_plots = false;
   double timeout_s = 0.0;
   bool allow_rejected = false;
+  std::optional<int> view_port;  // --view: serve a live view of each run on this port
 };
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
@@ -264,9 +266,15 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   }
   ProcessSupervisor children;
   if (!StartEvaluator(&children, run, monitor.get(), dir, stop)) return kFailed;
+  std::unique_ptr<RunViewer> viewer;
+  int view_readers = 0;
+  if (flags.view_port) {
+    viewer = std::make_unique<RunViewer>(run, *flags.view_port, dir + "/logs/mrslam_view.log");
+    view_readers = viewer->Join(monitor.get(), stop);
+  }
   // Then the agents, then the simulator (it waits for every agent's "ready"). The evaluator (and
-  // the progress monitor) must read every estimate: the agents wait for them.
-  StartSimulation(&children, run, robot_ids, monitor ? 2 : 1, 1, dir + "/logs/");
+  // the progress monitor and the viewer) must read every estimate: the agents wait for them.
+  StartSimulation(&children, run, robot_ids, (monitor ? 2 : 1) + view_readers, 1 + view_readers, dir + "/logs/");
 
   ProgressPrinter printer(progress_prefix);
   std::optional<Clock::time_point> first_step_at;
@@ -417,6 +425,12 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
                "input (stale and duplicate input never fails a run)");
   app.add_option("--timeout-s", flags->timeout_s, "Stop a run that takes longer than this (0: no limit)")
       ->check(common::FiniteNonNegative());
+  app.add_option("--view", flags->view_port,
+                 "Serve a live view of the run on http://127.0.0.1:PORT/ (mrslam_view; default port 8765, 0: a "
+                 "free one, printed)")
+      ->expected(0, 1)
+      ->default_str("8765")
+      ->check(CLI::Range(0, 65535));
 }
 
 }  // namespace

@@ -22,9 +22,9 @@ using testing::FakeSimulator;
 using testing::SourcePath;
 
 // Each test on a DDS domain of its own (ctest runs them in parallel).
-constexpr int kMalformedDomain = 141;
-constexpr int kAllowedDomain = 142;
-constexpr int kForeignDomain = 143;
+constexpr int kMalformedDomain = 144;
+constexpr int kAllowedDomain = 145;
+constexpr int kForeignDomain = 146;
 constexpr std::uint32_t kSteps = 3;
 constexpr double kDt = 0.65;
 

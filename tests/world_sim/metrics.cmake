@@ -17,3 +17,8 @@ mrslam_add_test(robot_scorer_test
 mrslam_add_test(paper_b_scorer_test
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/paper_b_scorer_test.cc
   LIBS mrslam_metrics)
+
+# The run step by step as the viewer shows it (view.jsonl).
+mrslam_add_test(view_steps_test
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/view_steps_test.cc
+  LIBS mrslam_run_evaluator)

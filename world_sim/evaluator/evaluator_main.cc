@@ -1,5 +1,5 @@
 // evaluator: the only process besides world_sim that reads the truth. Scores every robot's
-// estimates in its own frame and writes metrics.csv, summary.json, TUM trajectories and tracks.csv.
+// estimates in its own frame and writes metrics.csv, summary.json, TUM trajectories, tracks.csv and view.jsonl.
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -15,29 +15,11 @@
 #include "common/dds/participant.h"
 #include "common/logging.h"
 #include "mrslamPubSubTypes.h"
+#include "world_sim/evaluator/estimate_msg.h"
 #include "world_sim/evaluator/run_evaluator.h"
 
 namespace mrslam::evaluator {
 namespace {
-
-RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
-  RobotEstimate e;
-  e.step = m.stamp().step();
-  e.time_s = m.stamp().time_s();
-  e.pose = dds::FromMsg(m.pose());
-  e.covariance = dds::CovarianceFromMsg(m.covariance());
-  e.effective_sample_size = m.effective_sample_size();
-  for (const auto& l : m.landmarks()) {
-    if (l.tentative()) continue;
-    e.landmarks.push_back({Eigen::Vector2d(l.pose().x_m(), l.pose().y_m()), l.landmark_id()});
-  }
-  e.frames_known = m.frames_known();
-  e.rejected_samples = m.rejected_samples();
-  e.step_cpu_ms = m.step_cpu_ms();
-  e.final_trajectory_chunks = m.final_trajectory_chunks();
-  for (const auto& r : m.rendezvous()) e.rendezvous.push_back({r.peer_id(), r.step(), dds::FromMsg(r.t_self_peer())});
-  return e;
-}
 
 // A chunk of a robot's final trajectory, or an empty message why it is rejected.
 std::string FinalChunkProblem(const msg::FinalTrajectory& m) {
@@ -138,7 +120,7 @@ int Evaluate(const common::ScenarioOptions& scenario, int domain, bool shm, cons
                  id, r["position_rmse_m"].get<double>(), r["heading_rmse_deg"].get<double>(),
                  r["landmark_rmse_m"].get<double>(), r["dead_reckoning_rmse_m"].get<double>());
   }
-  spdlog::info("wrote {}/summary.json, metrics.csv, tracks.csv, trajectories/", out_dir);
+  spdlog::info("wrote {}/summary.json, metrics.csv, tracks.csv, view.jsonl, trajectories/", out_dir);
   return 0;
 }
 

@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 #include <Eigen/Geometry>
 
+#include "world_sim/evaluator/view_steps.h"
+
 namespace mrslam::evaluator {
 
 namespace {
@@ -137,6 +139,9 @@ nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_secon
     files.tum_estimate.close();
     files.tum_truth.close();
   }
+  std::ofstream view;
+  OpenOrThrow(view, out / "view.jsonl");
+  WriteViewLines(view, ViewHeader(scenario_), truth_, estimates_);
   std::ofstream js;
   OpenOrThrow(js, out / "summary.json");
   js << summary.dump(2) << "\n";

@@ -13,33 +13,10 @@
 #include "common/config/scenario_options.h"
 #include "common/sensor_types.h"
 #include "world_sim/evaluator/metrics.h"
+#include "world_sim/evaluator/robot_estimate.h"
 #include "world_sim/evaluator/robot_scorer.h"
 
 namespace mrslam::evaluator {
-
-// A rendezvous as an agent reports it: T(G_self <- G_peer) at a step.
-struct RendezvousRecord {
-  std::string peer;
-  std::uint32_t step = 0;
-  common::Pose2 t_self_peer;
-};
-
-// One robot's estimate at one step, as the evaluator needs it (no filter types).
-struct RobotEstimate {
-  std::uint32_t step = 0;
-  double time_s = 0.0;
-  common::Pose2 pose;  // in the robot's own frame
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
-  double effective_sample_size = 0.0;
-  std::vector<MapPoint> landmarks;  // in the robot's own frame
-  std::vector<std::string> frames_known;
-  std::vector<RendezvousRecord> rendezvous;
-  // Samples and peer messages the agent has rejected so far (malformed, stale, not for it).
-  std::uint32_t rejected_samples = 0;
-  double step_cpu_ms = 0.0;  // the agent's CPU time for this step's estimation
-  // Last step: chunks of the agent's final trajectory to come (0: its online path is final).
-  std::uint32_t final_trajectory_chunks = 0;
-};
 
 // One pose of an agent's final trajectory (its own frame).
 struct FinalPose {
@@ -51,7 +28,8 @@ struct FinalPose {
 // Scores a run: collects the truth and every robot's estimates and odometry by step, then
 // computes the per-step metrics (errors in each robot's own frame, through the true frame
 // pose) and the run summary of docs/metrics.md, and writes metrics.csv, summary.json, TUM
-// trajectories and tracks.csv (everything in the first robot's frame, for plots). Pure: no DDS.
+// trajectories, tracks.csv (everything in the first robot's frame, for plots) and view.jsonl
+// (the run step by step for mrslam_view --run). Pure: no DDS.
 class RunEvaluator {
  public:
   explicit RunEvaluator(const common::ScenarioOptions& scenario);
