@@ -25,6 +25,9 @@ void AddCommonFlags(CLI::App& app, CommonFlags* flags) {
   app.add_flag("--shm", flags->shared_memory, "Use the shared-memory transport besides UDPv4");
   app.add_option("--log-level", flags->log_level, "trace, debug, info, warn, error, critical or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+  app.add_option("--security", flags->security_dir,
+                 "DDS-Security on, with the identities in this folder (scripts/security/make_identities.sh)")
+      ->check(CLI::ExistingDirectory);
 }
 
 CLI::Validator FiniteNonNegative() {

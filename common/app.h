@@ -10,7 +10,7 @@
 #include <CLI/CLI.hpp>
 
 // What every mrslam executable shares on its command line (--scenario, --domain, --seed,
-// --set, --shm, --log-level), the stop flag that SIGINT/SIGTERM raise, and the top-level
+// --set, --shm, --log-level, --security), the stop flag that SIGINT/SIGTERM raise, and the top-level
 // error handling: one line on stderr and a non-zero exit code.
 namespace mrslam::common {
 
@@ -21,6 +21,7 @@ struct CommonFlags {
   std::vector<std::string> overrides;
   bool shared_memory = false;
   std::string log_level = "info";
+  std::string security_dir;  // DDS-Security on with this folder's identities (empty: off)
 };
 
 void AddCommonFlags(CLI::App& app, CommonFlags* flags);

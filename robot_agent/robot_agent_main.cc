@@ -60,6 +60,7 @@ int Run(AgentFlags flags) {
   options.lockstep = scenario.run.mode == common::RunMode::kLockstep;
   options.horizon_steps = static_cast<std::uint32_t>(scenario.run.horizon_steps);
   options.allow_rejected = flags.allow_rejected;
+  options.security_dir = flags.common.security_dir;
   const auto& stop = common::InstallStopHandler();
   AgentNode node(agent, options, std::move(slam));
   return node.Run(stop) ? 0 : 130;

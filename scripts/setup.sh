@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   g++ cmake make pkg-config git ca-certificates
-  libfastrtps-dev fastddsgen fastdds-tools
+  libfastrtps-dev fastddsgen fastdds-tools openssl libssl-dev
   libyaml-cpp-dev libspdlog-dev libeigen3-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-matplotlib

@@ -57,6 +57,7 @@ int Run(SimFlags flags) {
   options.shared_memory = flags.common.shared_memory;
   options.truth_readers = flags.truth_readers;
   options.agents = BarrierAgents(scenario, flags.agents);
+  options.security_dir = flags.common.security_dir;
   const auto& stop = common::InstallStopHandler();
   SimNode node(scenario, options);
   if (!node.Run(stop)) {

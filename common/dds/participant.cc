@@ -7,6 +7,9 @@
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 
+#include "common/dds/identity_check.h"
+#include "common/dds/security.h"
+
 namespace mrslam::dds {
 
 namespace fdds = eprosima::fastdds::dds;
@@ -53,6 +56,14 @@ void LoadProfilesOnce() {
   if (!error.empty()) throw DdsError(error);
 }
 
+// Checks the identity's files and turns DDS-Security on.
+void Secure(const ParticipantOptions& options, fdds::DomainParticipantQos* qos) {
+  if (options.identity.empty()) throw DdsError("a security folder needs the process identity");
+  const SecurityFiles files = SecurityFilesFor(options.security_dir, options.identity);
+  CheckSecurityFiles(files, options.identity);
+  EnableSecurity(files, qos);
+}
+
 }  // namespace
 
 Participant::Participant(const ParticipantOptions& options) {
@@ -64,9 +75,11 @@ Participant::Participant(const ParticipantOptions& options) {
     throw DdsError("DDS participant profile '" + profile + "' missing from " + ProfilesPath());
   }
   qos.name(options.name);
+  if (!options.security_dir.empty()) Secure(options, &qos);
   participant_ = factory->create_participant(options.domain, qos, nullptr, fdds::StatusMask::none());
   if (participant_ == nullptr) {
-    throw DdsError("cannot create a DDS participant on domain " + std::to_string(options.domain));
+    throw DdsError("cannot create a DDS participant on domain " + std::to_string(options.domain) +
+                   (options.security_dir.empty() ? "" : " with the security files of '" + options.identity + "'"));
   }
   publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
@@ -101,8 +114,8 @@ std::string OdometryTopic(const std::string& robot_id) { return "mrslam/" + robo
 std::string EstimateTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/estimate"; }
 std::string FinalTrajectoryTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/final_trajectory"; }
 std::string AckTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/ack"; }
-std::string PeerTopic(const std::string& recipient_id, const std::string& kind) {
-  return "mrslam/peer/" + recipient_id + "/" + kind;
+std::string PeerTopic(const std::string& recipient_id, const std::string& sender_id, const std::string& kind) {
+  return "mrslam/peer/" + recipient_id + "/from/" + sender_id + "/" + kind;
 }
 
 }  // namespace mrslam::dds

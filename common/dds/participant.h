@@ -47,10 +47,16 @@ struct ParticipantOptions {
   int domain = 0;
   std::string name = "mrslam";
   bool shared_memory = false;  // default transports are UDPv4 only
+  // DDS-Security (docs/security.md): off when empty; else the folder of the identities and the
+  // process identity (world_sim, evaluator, monitor or a robot id) whose files to use.
+  std::string security_dir{};
+  std::string identity{};
 };
 
 // Owns one DomainParticipant, its publisher, subscriber and topics; deletes everything it
-// created on destruction. Not copyable. Writers and readers it makes must not outlive it.
+// created on destruction. With a security folder, checks the identity's files first (one-line
+// DdsError naming the file and the problem) and joins with DDS-Security on. Not copyable. Writers and readers it makes
+// must not outlive it.
 class Participant {
  public:
   explicit Participant(const ParticipantOptions& options);
@@ -202,8 +208,9 @@ std::string OdometryTopic(const std::string& robot_id);
 std::string EstimateTopic(const std::string& robot_id);
 std::string FinalTrajectoryTopic(const std::string& robot_id);
 std::string AckTopic(const std::string& robot_id);
-// A recipient's inbox for one kind of peer message: mrslam/peer/<recipient>/<kind>.
-std::string PeerTopic(const std::string& recipient_id, const std::string& kind);
+// One sender's topic into one recipient for one kind of peer message:
+// mrslam/peer/<recipient>/from/<sender>/<kind>. Permissions bind the sender to its identity.
+std::string PeerTopic(const std::string& recipient_id, const std::string& sender_id, const std::string& kind);
 constexpr char kTruthTopic[] = "mrslam/world/truth";
 constexpr char kClockTopic[] = "mrslam/world/clock";
 

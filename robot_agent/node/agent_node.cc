@@ -15,23 +15,13 @@
 #include "robot_agent/cooperation/sample_intake.h"
 #include "robot_agent/cooperation/sample_validation.h"
 #include "robot_agent/node/msg_conversion.h"
+#include "robot_agent/node/peer_endpoints.h"
 
 namespace mrslam::robot_agent {
 
 namespace {
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-
-// Writers into one peer's inbox, created when the agent first sends to that peer.
-struct PeerWriters {
-  PeerWriters(dds::Participant& p, const std::string& peer)
-      : relative(p, dds::PeerTopic(peer, "relative")),
-        map(p, dds::PeerTopic(peer, "map")),
-        moved(p, dds::PeerTopic(peer, "moved")) {}
-  dds::Writer<msg::RelativeMeasurementPubSubType> relative;
-  dds::Writer<msg::MapSnapshotPubSubType> map;
-  dds::Writer<msg::LandmarkMovedNoticePubSubType> moved;
-};
 }  // namespace
 
 struct AgentNode::Impl {
@@ -48,10 +38,8 @@ struct AgentNode::Impl {
   dds::Writer<msg::StepAckPubSubType> ack_writer;
   dds::Writer<msg::FinalTrajectoryPubSubType> final_writer;
   std::map<std::uint32_t, double> step_times;  // every step's time, for the final trajectory
-  // This agent's inbox (peer to peer) and, lazily, writers into the peers' inboxes.
-  dds::Reader<msg::RelativeMeasurementPubSubType> relative_inbox;
-  dds::Reader<msg::MapSnapshotPubSubType> map_inbox;
-  dds::Reader<msg::LandmarkMovedNoticePubSubType> moved_inbox;
+  // Readers of every peer's topics into this agent and, lazily, writers into the peers'.
+  std::map<std::string, std::unique_ptr<PeerReaders>> from_peers;
   std::map<std::string, std::unique_ptr<PeerWriters>> peers;
   cooperation::Cooperation cooperation;
   // Peer messages received, by the sender's step: applied at the start of the next step.
@@ -72,7 +60,7 @@ struct AgentNode::Impl {
       : agent(a),
         options(o),
         filter(std::move(f)),
-        participant({o.domain, "robot_agent/" + a.robot_id, o.shared_memory}),
+        participant({o.domain, "robot_agent/" + a.robot_id, o.shared_memory, o.security_dir, a.robot_id}),
         lidar_reader(participant, dds::LidarTopic(a.robot_id), &notifier),
         imu_reader(participant, dds::ImuTopic(a.robot_id), &notifier),
         odometry_reader(participant, dds::OdometryTopic(a.robot_id), &notifier),
@@ -80,13 +68,15 @@ struct AgentNode::Impl {
         estimate_writer(participant, dds::EstimateTopic(a.robot_id)),
         ack_writer(participant, dds::AckTopic(a.robot_id)),
         final_writer(participant, dds::FinalTrajectoryTopic(a.robot_id)),
-        relative_inbox(participant, dds::PeerTopic(a.robot_id, "relative"), &notifier),
-        map_inbox(participant, dds::PeerTopic(a.robot_id, "map"), &notifier),
-        moved_inbox(participant, dds::PeerTopic(a.robot_id, "moved"), &notifier),
         cooperation(a),
         lidar(o.horizon_steps),
         imu(o.horizon_steps),
-        odometry(o.horizon_steps) {}
+        odometry(o.horizon_steps) {
+    for (const auto& peer : a.team) {
+      if (peer != a.robot_id)
+        from_peers[peer] = std::make_unique<PeerReaders>(participant, a.robot_id, peer, &notifier);
+    }
+  }
 
   void Reject(cooperation::Rejection kind, const std::string& why, std::uint32_t n = 1) {
     counters.rejected.Add(kind, n);
@@ -124,12 +114,17 @@ struct AgentNode::Impl {
       Buffer(dds::FromMsg(od), writer, &odometry, &cooperation::SanitizeOdometry, "odometry");
     msg::StepClock c;
     while (clock_reader.TryTake(&c, &writer)) AcceptClock(c, writer);
+    for (auto& [peer, from] : from_peers) DrainPeer(peer, from.get());
+  }
+
+  // Takes what one peer sent on its own topics into this agent.
+  void DrainPeer(const std::string& peer, PeerReaders* from) {
     msg::RelativeMeasurement r;
-    while (relative_inbox.TryTake(&r)) AcceptPeer(FromMsg(r), &cooperation::PeerInbox::measurements);
+    while (from->relative.TryTake(&r)) AcceptPeer(peer, FromMsg(r), &cooperation::PeerInbox::measurements);
     msg::MapSnapshot ms;
-    while (map_inbox.TryTake(&ms)) AcceptPeer(FromMsg(ms), &cooperation::PeerInbox::maps);
+    while (from->map.TryTake(&ms)) AcceptPeer(peer, FromMsg(ms), &cooperation::PeerInbox::maps);
     msg::LandmarkMovedNotice n;
-    while (moved_inbox.TryTake(&n)) AcceptPeer(FromMsg(n), &cooperation::PeerInbox::moved);
+    while (from->moved.TryTake(&n)) AcceptPeer(peer, FromMsg(n), &cooperation::PeerInbox::moved);
   }
 
   // Keeps a step clock from the simulator (the first participant to deliver one), or rejects it.
@@ -148,18 +143,19 @@ struct AgentNode::Impl {
     }
   }
 
-  // Buffers a peer message for the start of the step after the one it was sent in, or rejects
-  // it (not for us, unknown sender, a step already past or beyond the horizon).
+  // Buffers a peer message that came on topic_sender's topic (a peer of the team) for the start
+  // of the step after the one it was sent in, or rejects it (a sender other than the topic's, not
+  // for us, a step already past or beyond the horizon).
   template <typename T>
-  void AcceptPeer(T message, std::vector<T> cooperation::PeerInbox::*list) {
+  void AcceptPeer(const std::string& topic_sender, T message, std::vector<T> cooperation::PeerInbox::*list) {
     const auto& h = message.header;
     using cooperation::Rejection;
-    if (h.recipient != agent.robot_id) {
-      Reject(Rejection::kMalformed, "peer message for '" + h.recipient + "' in " + agent.robot_id + "'s inbox");
+    if (h.sender != topic_sender) {
+      Reject(Rejection::kMalformed, "peer message from '" + h.sender + "' on " + topic_sender + "'s topic");
       return;
     }
-    if (agent.TeamIndex(h.sender) < 0 || h.sender == agent.robot_id) {
-      Reject(Rejection::kMalformed, "peer message from unknown robot '" + h.sender + "'");
+    if (h.recipient != agent.robot_id) {
+      Reject(Rejection::kMalformed, "peer message for '" + h.recipient + "' in " + agent.robot_id + "'s inbox");
       return;
     }
     if (h.step + 1 < next_step) {
@@ -227,7 +223,7 @@ struct AgentNode::Impl {
     std::map<std::string, std::uint32_t> counts;
     auto writers = [&](const std::string& peer) -> PeerWriters& {
       auto& w = peers[peer];
-      if (!w) w = std::make_unique<PeerWriters>(participant, peer);
+      if (!w) w = std::make_unique<PeerWriters>(participant, agent.robot_id, peer);
       return *w;
     };
     auto stamp = [&](cooperation::PeerHeader* h) { h->sequence = ++sent_sequence[h->recipient]; };

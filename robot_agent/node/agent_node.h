@@ -30,6 +30,8 @@ struct AgentNodeOptions {
   // Finish normally even after rejections that make the run's numbers doubtful (malformed,
   // foreign-writer, contested, beyond-horizon); otherwise the agent ends with an AgentError.
   bool allow_rejected = false;
+  // DDS-Security on with the identities in this folder (the agent's identity is its robot id).
+  std::string security_dir;
 };
 
 // What the agent processed and rejected (each rejection also logged as a warning).

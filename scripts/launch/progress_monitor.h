@@ -23,7 +23,9 @@ struct Progress {
 class ProgressMonitor {
  public:
   // Throws mrslam::dds::DdsError when the participant or a reader cannot be created.
-  ProgressMonitor(int domain, bool shared_memory, const std::vector<std::string>& robot_ids);
+  // With a security folder, it joins with the identity "monitor".
+  ProgressMonitor(int domain, bool shared_memory, const std::string& security_dir,
+                  const std::vector<std::string>& robot_ids);
   ~ProgressMonitor();
   ProgressMonitor(const ProgressMonitor&) = delete;
   ProgressMonitor& operator=(const ProgressMonitor&) = delete;

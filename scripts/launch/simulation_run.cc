@@ -14,6 +14,7 @@ std::vector<std::string> ChildCommand(const RunArgs& run, const std::string& exe
   for (const auto& o : run.overrides) argv.insert(argv.end(), {"--set", o});
   if (run.shared_memory) argv.emplace_back("--shm");
   if (!run.log_level.empty()) argv.insert(argv.end(), {"--log-level", run.log_level});
+  if (!run.security_dir.empty()) argv.insert(argv.end(), {"--security", run.security_dir});
   argv.insert(argv.end(), extra.begin(), extra.end());
   return argv;
 }

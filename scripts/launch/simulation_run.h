@@ -14,7 +14,8 @@
 // to their end.
 namespace mrslam::launch {
 
-// What every process of a run gets: --scenario --domain --seed --set... [--shm] [--log-level].
+// What every process of a run gets: --scenario --domain --seed --set... [--shm] [--log-level]
+// [--security].
 struct RunArgs {
   std::string scenario_path;
   int domain = 0;
@@ -23,6 +24,7 @@ struct RunArgs {
   bool shared_memory = false;
   std::string log_level;        // empty: each process's default
   bool allow_rejected = false;  // the agents end normally after input that fails a run
+  std::string security_dir{};   // DDS-Security with the identities in this folder (empty: off)
 };
 
 // The command line of one of the run's processes: the executable beside this one, the run's

@@ -1,14 +1,17 @@
 // Multi-process: a robot_agent rejects and counts by kind what it must not take — malformed
 // samples (a NaN detection, a sample naming another robot), stale ones (a step already
 // processed), scans written by a participant other than the simulator, a step clock from a second
-// participant — and goes on with the simulator's samples. Input that makes the run's numbers
-// doubtful ends the agent with an error naming the kind, unless --allow-rejected.
+// participant, a peer message naming a sender other than its topic's — and goes on with the
+// simulator's samples. Input that makes the run's numbers doubtful ends the agent with an error
+// naming the kind, unless --allow-rejected.
 #include <gtest/gtest.h>
 
 #include <limits>
 #include <string>
 #include <vector>
 
+#include "robot_agent/cooperation/peer_messages.h"
+#include "robot_agent/node/msg_conversion.h"
 #include "tests/integration/child_process.h"
 #include "tests/integration/fake_simulator.h"
 
@@ -22,9 +25,10 @@ using testing::FakeSimulator;
 using testing::SourcePath;
 
 // Each test on a DDS domain of its own (ctest runs them in parallel).
-constexpr int kMalformedDomain = 144;
-constexpr int kAllowedDomain = 145;
-constexpr int kForeignDomain = 146;
+constexpr int kMalformedDomain = 141;
+constexpr int kAllowedDomain = 146;
+constexpr int kForeignDomain = 147;
+constexpr int kPeerSenderDomain = 144;
 constexpr std::uint32_t kSteps = 3;
 constexpr double kDt = 0.65;
 
@@ -115,6 +119,37 @@ TEST(AgentRejectsTest, ScansFromAnotherParticipantAreNotTakenAndFailTheRun) {
   ASSERT_TRUE(status.has_value()) << log;
   EXPECT_NE(*status, 0) << log;
   EXPECT_NE(log.find("rejected 3 foreign-writer input(s)"), std::string::npos) << log;
+}
+
+// A peer message on r2's topic into r1 whose header names another sender (r3) is not taken: it
+// counts as malformed and fails the run.
+TEST(AgentRejectsTest, PeerMessageNamingAnotherSenderThanItsTopicIsMalformed) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-rejects");
+  const std::string log_path = temp_dir.path() + "/agent.log";
+  dds::Participant participant({kPeerSenderDomain, "fake_sim_and_r2", false});
+  FakeSimulator sim(participant, "r1", kSteps, kDt);
+  dds::Writer<msg::RelativeMeasurementPubSubType> from_r2(participant, dds::PeerTopic("r1", "r2", "relative"));
+  ChildProcess agent(AgentCommand(kPeerSenderDomain, false), log_path);
+  ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(log_path);
+  ASSERT_TRUE(sim.PublishStep(1, OneLandmark(false), 1.0, 0.2));
+  ASSERT_EQ(sim.WaitAck(1), 0) << testing::ReadFile(log_path);
+  robot_agent::cooperation::RelativeMeasurement forged;
+  forged.header = {"r3", "r1", 1, kDt, 1};
+  forged.range_m = 3.0;
+  forged.sender_covariance = Eigen::Matrix3d::Identity() * 1e-4;
+  ASSERT_TRUE(from_r2.Write(robot_agent::ToMsg(forged)));
+  ASSERT_TRUE(from_r2.WaitForAcknowledgments(seconds(20)));
+  for (std::uint32_t k = 2; k <= kSteps; ++k) {
+    ASSERT_TRUE(sim.PublishStep(k, OneLandmark(false), 1.0, 0.2));
+    EXPECT_EQ(sim.WaitAck(k), 1) << testing::ReadFile(log_path);
+  }
+  const std::optional<int> status = agent.WaitExit(seconds(20));
+  const std::string log = testing::ReadFile(log_path);
+  ASSERT_TRUE(status.has_value()) << log;
+  EXPECT_NE(*status, 0) << log;
+  EXPECT_NE(log.find("peer message from 'r3' on r2's topic"), std::string::npos) << log;
+  EXPECT_NE(log.find("agent r1 rejected 1 malformed input(s)"), std::string::npos) << log;
 }
 
 }  // namespace

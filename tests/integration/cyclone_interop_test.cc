@@ -268,7 +268,8 @@ TEST_F(CycloneInteropTest, ACycloneRelativeMeasurementReachesTheAgentAndIsValida
   const std::string log = temp_dir.path() + "/agent.log";
   CycloneParticipant cyclone(kPeerDomain, address_);
   ASSERT_TRUE(cyclone.ok());
-  const dds_entity_t to_r1 = cyclone.Writer(&mrslam_msg_RelativeMeasurement_desc, dds::PeerTopic("r1", "relative"));
+  const dds_entity_t to_r1 =
+      cyclone.Writer(&mrslam_msg_RelativeMeasurement_desc, dds::PeerTopic("r1", "r2", "relative"));
   ASSERT_GT(to_r1, 0);
   dds::Participant participant({kPeerDomain, "fake_sim", false});
   FakeSimulator sim(participant, "r1", kSteps, kDt);

@@ -1,5 +1,5 @@
 // Multi-process: an ekf_ela robot_agent (r1) meets a peer (r2, played by this test over DDS):
-// after the rendezvous r2's "landmark moved" notice crosses DDS into r1's inbox, and r1 drops
+// after the rendezvous r2's "landmark moved" notice crosses DDS on r2's topic into r1, and r1 drops
 // that landmark from its map (and only that one).
 #include <gtest/gtest.h>
 
@@ -60,8 +60,8 @@ TEST(MovedNoticeTest, NoticeFromAPeerDropsThatLandmarkOnly) {
   const std::string& dir = temp_dir.path();
   dds::Participant participant({kDomain, "fake_sim_and_r2", false});
   FakeSimulator sim(participant, "r1", kSteps, kDt);
-  dds::Writer<msg::RelativeMeasurementPubSubType> to_r1_relative(participant, dds::PeerTopic("r1", "relative"));
-  dds::Writer<msg::LandmarkMovedNoticePubSubType> to_r1_moved(participant, dds::PeerTopic("r1", "moved"));
+  dds::Writer<msg::RelativeMeasurementPubSubType> to_r1_relative(participant, dds::PeerTopic("r1", "r2", "relative"));
+  dds::Writer<msg::LandmarkMovedNoticePubSubType> to_r1_moved(participant, dds::PeerTopic("r1", "r2", "moved"));
   dds::Reader<msg::EstimatePubSubType> estimates(participant, dds::EstimateTopic("r1"));
   ChildProcess agent({BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot", "r1",
                       "--domain", std::to_string(kDomain), "--filter", "ekf_ela", "--set",

@@ -41,11 +41,11 @@ std::vector<FinalPose> FromFinalMsg(const msg::FinalTrajectory& m) {
 }
 
 // Owns the participant and readers; feeds the RunEvaluator until the run is complete.
-int Evaluate(const common::ScenarioOptions& scenario, int domain, bool shm, const std::string& out_dir,
-             const std::atomic<bool>& stop) {
+int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOptions& dds_options,
+             const std::string& out_dir, const std::atomic<bool>& stop) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
-  dds::Participant participant({domain, "evaluator", shm});
+  dds::Participant participant(dds_options);
   dds::Notifier notifier;
   dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic, &notifier);
   std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimate_readers;
@@ -63,7 +63,7 @@ int Evaluate(const common::ScenarioOptions& scenario, int domain, bool shm, cons
   std::uint64_t seen = 0;
   auto last_data = Clock::now();
   const auto timeout = std::chrono::duration<double>(scenario.run.ack_timeout_s * 2.0);
-  spdlog::info("evaluating '{}' seed {} on domain {}", scenario.name, scenario.seed, domain);
+  spdlog::info("evaluating '{}' seed {} on domain {}", scenario.name, scenario.seed, dds_options.domain);
   while (!evaluator.Complete()) {
     if (stop) {
       spdlog::warn("stopped before the run was complete ({})", evaluator.Missing());
@@ -140,7 +140,8 @@ int main(int argc, char** argv) {
                            common::SetupLogging("evaluator", flags.log_level);
                            const auto scenario = common::LoadScenarioFromFlags(flags);
                            const int domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
-                           return evaluator::Evaluate(scenario, domain, flags.shared_memory, out_dir,
-                                                      common::InstallStopHandler());
+                           const mrslam::dds::ParticipantOptions dds_options{domain, "evaluator", flags.shared_memory,
+                                                                             flags.security_dir, "evaluator"};
+                           return evaluator::Evaluate(scenario, dds_options, out_dir, common::InstallStopHandler());
                          });
 }

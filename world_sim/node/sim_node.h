@@ -24,6 +24,8 @@ struct SimNodeOptions {
   double drain_timeout_s = 10.0;
   // Before step 1, wait until this many readers (the evaluator) have matched the truth topic.
   int truth_readers = 0;
+  // DDS-Security on with the identities in this folder (identity "world_sim"); empty: off.
+  std::string security_dir;
 };
 
 // The simulator's DDS node: steps the pure World and publishes, per robot, lidar, IMU and
