@@ -190,8 +190,9 @@ struct AgentNode::Impl {
   }
 
   // In lockstep, peer messages of step k-1 beyond those the clock of step k announces were
-  // written by someone other than the peers the simulator counted: contested. Forgets the
-  // counts of step k-1.
+  // written by someone other than the peers the simulator counted: contested, and none of that
+  // sender's messages of that step is used (which is genuine cannot be told). Forgets the counts
+  // of step k-1.
   void CheckPeerCounts(const msg::StepClock& c) {
     const std::uint32_t sent_step = c.stamp().step() - 1;
     const auto announced = Announced(c);
@@ -204,12 +205,23 @@ struct AgentNode::Impl {
       const std::uint32_t expected = a == announced.end() ? 0U : a->second;
       if (options.lockstep && it->second > expected) {
         Reject(cooperation::Rejection::kContested,
-               fmt::format("{} peer message(s) of step {} from {} where the simulator counted {}", it->second,
-                           sent_step, it->first.first, expected),
+               fmt::format("{} peer message(s) of step {} from {} where the simulator counted {}; none is used",
+                           it->second, sent_step, it->first.first, expected),
                it->second - expected);
+        DropPeerMessages(sent_step, it->first.first);
       }
       it = received.erase(it);
     }
+  }
+
+  void DropPeerMessages(std::uint32_t step, const std::string& sender) {
+    const auto in = inbox.find(step);
+    if (in == inbox.end()) return;
+    const auto from_sender = [&](const auto& m) { return m.header.sender == sender; };
+    auto drop = [&](auto* list) { list->erase(std::remove_if(list->begin(), list->end(), from_sender), list->end()); };
+    drop(&in->second.measurements);
+    drop(&in->second.maps);
+    drop(&in->second.moved);
   }
 
   template <typename W, typename M>

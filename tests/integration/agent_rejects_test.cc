@@ -29,6 +29,7 @@ constexpr int kMalformedDomain = 141;
 constexpr int kAllowedDomain = 146;
 constexpr int kForeignDomain = 147;
 constexpr int kPeerSenderDomain = 144;
+constexpr int kUnannouncedDomain = 148;
 constexpr std::uint32_t kSteps = 3;
 constexpr double kDt = 0.65;
 
@@ -150,6 +151,39 @@ TEST(AgentRejectsTest, PeerMessageNamingAnotherSenderThanItsTopicIsMalformed) {
   EXPECT_NE(*status, 0) << log;
   EXPECT_NE(log.find("peer message from 'r3' on r2's topic"), std::string::npos) << log;
   EXPECT_NE(log.find("agent r1 rejected 1 malformed input(s)"), std::string::npos) << log;
+}
+
+// In lockstep the step clock announces how many peer messages each sender wrote to each
+// recipient during the step before. A well-formed message from "r2" that the simulator never
+// counted (r2 sent nothing) was written by someone else: contested, and the run fails.
+TEST(AgentRejectsTest, APeerMessageTheClockDidNotAnnounceIsContested) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-rejects");
+  const std::string log_path = temp_dir.path() + "/agent.log";
+  dds::Participant participant({kUnannouncedDomain, "fake_sim", false});
+  dds::Participant outsider({kUnannouncedDomain, "outsider", false});
+  FakeSimulator sim(participant, "r1", kSteps, kDt);
+  dds::Writer<msg::RelativeMeasurementPubSubType> as_r2(outsider, dds::PeerTopic("r1", "r2", "relative"));
+  ChildProcess agent(AgentCommand(kUnannouncedDomain, false), log_path);
+  ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(log_path);
+  ASSERT_TRUE(sim.PublishStep(1, OneLandmark(false), 1.0, 0.2));
+  ASSERT_EQ(sim.WaitAck(1), 0) << testing::ReadFile(log_path);
+  robot_agent::cooperation::RelativeMeasurement forged;
+  forged.header = {"r2", "r1", 1, kDt, 1};
+  forged.range_m = 3.0;
+  forged.sender_covariance = Eigen::Matrix3d::Identity() * 1e-4;
+  ASSERT_TRUE(as_r2.Write(robot_agent::ToMsg(forged)));
+  ASSERT_TRUE(as_r2.WaitForAcknowledgments(seconds(20)));
+  for (std::uint32_t k = 2; k <= kSteps; ++k) {
+    ASSERT_TRUE(sim.PublishStep(k, OneLandmark(false), 1.0, 0.2));  // announcing no peer message
+    EXPECT_EQ(sim.WaitAck(k), 1) << testing::ReadFile(log_path);
+  }
+  const std::optional<int> status = agent.WaitExit(seconds(20));
+  const std::string log = testing::ReadFile(log_path);
+  ASSERT_TRUE(status.has_value()) << log;
+  EXPECT_NE(*status, 0) << log;
+  EXPECT_NE(log.find("1 peer message(s) of step 1 from r2 where the simulator counted 0"), std::string::npos) << log;
+  EXPECT_NE(log.find("agent r1 rejected 1 contested input(s)"), std::string::npos) << log;
 }
 
 }  // namespace
