@@ -361,7 +361,7 @@ int WriteAggregate(const common::ScenarioOptions& scenario, const std::vector<lo
 std::optional<LaunchFlags> SecureFlags(LaunchFlags flags, const common::ScenarioOptions& scenario,
                                        const std::string& out_dir, const std::atomic<bool>& stop) {
   if (!flags.secure) return flags;
-  std::vector<std::string> names = {"world_sim", "evaluator", "monitor"};
+  std::vector<std::string> names = {"world_sim", "evaluator", "monitor", "viewer"};
   for (const auto& r : scenario.robots) names.push_back(r.id);
   flags.common.security_dir = out_dir + "/security";
   if (!MakeIdentities(flags.common.security_dir, names, stop)) return std::nullopt;
@@ -374,8 +374,6 @@ int Main(LaunchFlags flags) {
   if (!flags.seeds.empty() && flags.common.seed >= 0) throw std::runtime_error("give --seed or --seeds, not both");
   if (flags.secure && !flags.common.security_dir.empty())
     throw std::runtime_error("give --secure or --security, not both");
-  if (flags.view_port && (flags.secure || !flags.common.security_dir.empty()))
-    throw std::runtime_error("--view does not run with DDS-Security yet (the viewer has no identity)");
   if (!flags.common.security_dir.empty()) flags.common.security_dir = fs::absolute(flags.common.security_dir).string();
   const std::vector<long long> seeds = flags.seeds.empty()
                                            ? std::vector<long long>{static_cast<long long>(scenario.seed)}

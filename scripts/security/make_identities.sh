@@ -4,8 +4,8 @@
 #   <id>_cert.pem, <id>_key.pem (mode 600)       one identity per process name given
 #   governance.p7s                               the domain's rules, signed by the permissions CA
 #   permissions_<id>.p7s                         what each process may publish and read
-# Process names: world_sim, evaluator, monitor (the launcher's progress monitor); any other name
-# is a robot of the team. Keys never go into git: make them into a run folder or the build tree.
+# Process names: world_sim, evaluator, monitor (the launcher's progress monitor), viewer (the live
+# view, a truth reader); any other name is a robot of the team. Keys never go into git: make them into a run folder or the build tree.
 # Running it again keeps the CAs and identities already in OUT_DIR and signs the documents anew.
 # Usage: make_identities.sh OUT_DIR ID...
 set -euo pipefail
@@ -25,7 +25,7 @@ robots=()
 for id in "${ids[@]}"; do
   [[ $id =~ ^[A-Za-z0-9_]+$ ]] || die "process name '$id' is not made of letters, digits and '_'"
   case $id in
-    world_sim | evaluator | monitor) ;;
+    world_sim | evaluator | monitor | viewer) ;;
     *) robots+=("$id") ;;
   esac
 done
@@ -120,6 +120,10 @@ grants() {
       ;;
     monitor)
       echo "<subscribe><topics><topic>mrslam/world/clock</topic>$(topics mrslam/ /estimate)</topics></subscribe>"
+      ;;
+    viewer)
+      echo "<subscribe><topics><topic>mrslam/world/clock</topic><topic>mrslam/world/truth</topic>"
+      echo "$(topics mrslam/ /estimate /lidar)</topics></subscribe>"
       ;;
     *)
       echo "<publish><topics><topic>mrslam/$1/estimate</topic><topic>mrslam/$1/ack</topic>"

@@ -12,10 +12,6 @@
 
 namespace mrslam::view {
 
-namespace {
-constexpr char kParticipantName[] = "mrslam_view";
-}  // namespace
-
 // The readers and the latest state they delivered (touched by the feed's thread only).
 struct LiveFeed::State {
   dds::Participant participant;
@@ -30,10 +26,8 @@ struct LiveFeed::State {
   std::map<std::string, evaluator::RobotEstimate> estimates;
   std::map<std::string, common::LidarScan> scans;
 
-  State(const common::ScenarioOptions& scenario, int domain, bool shared_memory)
-      : participant({domain, kParticipantName, shared_memory}),
-        clock(participant, dds::kClockTopic),
-        truth(participant, dds::kTruthTopic) {
+  State(const common::ScenarioOptions& scenario, const dds::ParticipantOptions& options)
+      : participant(options), clock(participant, dds::kClockTopic), truth(participant, dds::kTruthTopic) {
     for (const auto& r : scenario.robots) {
       estimate_readers[r.id] =
           std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id));
@@ -96,9 +90,9 @@ struct LiveFeed::State {
   }
 };
 
-LiveFeed::LiveFeed(const common::ScenarioOptions& scenario, int domain, bool shared_memory, FrameHub* hub,
+LiveFeed::LiveFeed(const common::ScenarioOptions& scenario, const dds::ParticipantOptions& participant, FrameHub* hub,
                    std::chrono::milliseconds period)
-    : state_(std::make_unique<State>(scenario, domain, shared_memory)), hub_(hub) {
+    : state_(std::make_unique<State>(scenario, participant)), hub_(hub) {
   thread_ = std::thread([this, period] { Loop(period); });
 }
 

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "common/config/scenario_options.h"
+#include "common/dds/participant.h"
 #include "scripts/view/frame_hub.h"
 
 // The live side of the viewer: one more reader in a run's DDS domain.
@@ -19,7 +20,7 @@ namespace mrslam::view {
 class LiveFeed {
  public:
   // Throws mrslam::dds::DdsError when the participant or a reader cannot be created.
-  LiveFeed(const common::ScenarioOptions& scenario, int domain, bool shared_memory, FrameHub* hub,
+  LiveFeed(const common::ScenarioOptions& scenario, const dds::ParticipantOptions& participant, FrameHub* hub,
            std::chrono::milliseconds period);
   ~LiveFeed();
   LiveFeed(const LiveFeed&) = delete;

@@ -61,7 +61,10 @@ int Live(const ViewFlags& flags) {
   FrameHub hub;
   ViewServer server({info.dump(), &hub, ""}, kFramePeriod);
   StartAndAnnounce(&server, flags.port, "scenario '" + scenario.name + "', DDS domain " + std::to_string(domain));
-  LiveFeed feed(scenario, domain, flags.common.shared_memory, &hub, kFramePeriod);
+  // The participant is named mrslam_view (the launcher waits to see it); under DDS-Security its
+  // identity is "viewer".
+  LiveFeed feed(scenario, {domain, "mrslam_view", flags.common.shared_memory, flags.common.security_dir, "viewer"},
+                &hub, kFramePeriod);
   WaitForStopSignal();
   feed.Stop();  // the last frame, then the clients' event streams end
   hub.Close();
