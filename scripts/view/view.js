@@ -198,7 +198,7 @@ function renderMap(rec) {
   for (const { id } of view.header.robots) drawDisc(ctx, proj, rec, id);
 }
 
-// ---- the panels: position error over time, rejected samples, frames and rendezvous --------
+// ---- the panels: position error over time, estimator CPU, rejected samples, frames, rendezvous
 // Position error per step of the robot's estimate against the truth in its own frame G_i.
 function errorSeries(id, past) {
   const truthByStep = new Map(), series = [];
@@ -233,7 +233,7 @@ function panelOf(id) {
   panel.className = 'panel';
   panel.id = `panel-${id}`;
   panel.style.setProperty('--color', colorOf(id));
-  panel.innerHTML = `<h3>${id}</h3><p class="error"></p><canvas></canvas><p class="rejected"></p>` +
+  panel.innerHTML = `<h3>${id}</h3><p class="error"></p><canvas></canvas><p class="cpu"></p><p class="rejected"></p>` +
     '<p class="frames"></p><p class="rendezvous"></p>';
   document.getElementById('panels').appendChild(panel);
   return panel;
@@ -247,6 +247,7 @@ function renderPanels(rec) {
     panel.querySelector('.error').textContent =
       last === null ? 'position error -' : `position error ${last.toFixed(3)} m (2-sigma up to ${sigma.toFixed(3)} m)`;
     drawSparkline(panel.querySelector('canvas'), series, colorOf(id));
+    panel.querySelector('.cpu').textContent = `estimator CPU this step ${e ? e.cpu_ms.toFixed(2) : '-'} ms`;
     panel.querySelector('.rejected').textContent = `rejected samples ${e ? e.rejected : '-'}`;
     panel.querySelector('.frames').textContent = `frames known: ${e && e.frames_known.length ? e.frames_known.join(', ') : 'none'}`;
     panel.querySelector('.rendezvous').textContent =

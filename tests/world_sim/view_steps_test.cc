@@ -37,6 +37,7 @@ RobotEstimate EstimateAt(std::uint32_t step) {
   e.frames_known = {"r2"};
   e.rendezvous = {{"r2", 3, {}}};
   e.rejected_samples = 2;
+  e.step_cpu_ms = 1.25;
   return e;
 }
 
@@ -80,6 +81,7 @@ TEST(ViewStepsTest, StepHoldsTheTruthEstimatesMapsAndScans) {
   EXPECT_EQ(r1["frames_known"], json::array({"r2"}));
   EXPECT_EQ(r1["rendezvous"][0], json::array({"r2", 3}));
   EXPECT_EQ(r1["rejected"], 2);
+  EXPECT_EQ(r1["cpu_ms"], 1.25);
   EXPECT_EQ(step["lidar"]["r1"][0], json::array({1.5, 0.25}));  // range, bearing
 }
 

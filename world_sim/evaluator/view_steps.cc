@@ -47,7 +47,8 @@ json EstimateJson(const RobotEstimate& e) {
           {"landmarks", landmarks},
           {"frames_known", e.frames_known},
           {"rendezvous", rendezvous},
-          {"rejected", e.rejected_samples}};
+          {"rejected", e.rejected_samples},
+          {"cpu_ms", Round6(e.step_cpu_ms)}};
 }
 
 json ScanJson(const common::LidarScan& scan) {
