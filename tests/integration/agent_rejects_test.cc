@@ -19,10 +19,8 @@ namespace mrslam {
 namespace {
 
 using std::chrono::seconds;
-using testing::BinPath;
 using testing::ChildProcess;
 using testing::FakeSimulator;
-using testing::SourcePath;
 
 // Each test on a DDS domain of its own (ctest runs them in parallel).
 constexpr int kMalformedDomain = 141;
@@ -40,17 +38,9 @@ common::LidarScan OneLandmark(bool with_nan_detection) {
 }
 
 std::vector<std::string> AgentCommand(int domain, bool allow_rejected) {
-  std::vector<std::string> argv = {BinPath("robot_agent"),
-                                   "--scenario",
-                                   SourcePath("config/paper_two_robots.yaml"),
-                                   "--robot",
-                                   "r1",
-                                   "--domain",
-                                   std::to_string(domain),
-                                   "--particles",
-                                   "50"};
-  if (allow_rejected) argv.emplace_back("--allow-rejected");
-  return argv;
+  std::vector<std::string> extra = {"--particles", "50"};
+  if (allow_rejected) extra.emplace_back("--allow-rejected");
+  return testing::R1AgentCommand(domain, extra);
 }
 
 // Steps 1..3 with a NaN detection at step 1, then a stale scan of step 1 and an odometry sample

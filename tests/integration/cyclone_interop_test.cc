@@ -27,10 +27,8 @@ namespace mrslam {
 namespace {
 
 using std::chrono::seconds;
-using testing::BinPath;
 using testing::ChildProcess;
 using testing::FakeSimulator;
-using testing::SourcePath;
 
 constexpr int kDecodeDomain = 142;  // this test's own DDS domains
 constexpr int kPeerDomain = 143;
@@ -189,19 +187,9 @@ common::LidarScan ScanAtOrigin() {
 }
 
 std::vector<std::string> AgentCommand(int domain, const std::vector<std::string>& extra) {
-  std::vector<std::string> argv = {BinPath("robot_agent"),
-                                   "--scenario",
-                                   SourcePath("config/paper_two_robots.yaml"),
-                                   "--robot",
-                                   "r1",
-                                   "--domain",
-                                   std::to_string(domain),
-                                   "--filter",
-                                   "ekf_ela",
-                                   "--set",
-                                   "robots.0.pose=[0.0, 0.0, 3.141592653589793]"};
-  argv.insert(argv.end(), extra.begin(), extra.end());
-  return argv;
+  std::vector<std::string> flags = {"--filter", "ekf_ela", "--set", "robots.0.pose=[0.0, 0.0, 3.141592653589793]"};
+  flags.insert(flags.end(), extra.begin(), extra.end());
+  return testing::R1AgentCommand(domain, flags);
 }
 
 // r2's measurement of r1 (range 3, bearing -pi/2), sent during `step`, as r2 would send it.

@@ -7,6 +7,7 @@
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
+#include "tests/test_paths.h"
 
 namespace mrslam::testing {
 
@@ -78,5 +79,15 @@ class FakeSimulator {
   dds::Writer<msg::StepClockPubSubType> clock_;
   dds::Reader<msg::StepAckPubSubType> ack_;
 };
+
+// The command of a robot_agent for r1 of config/paper_two_robots.yaml on `domain`, fed by a
+// FakeSimulator, with extra flags after.
+inline std::vector<std::string> R1AgentCommand(int domain, const std::vector<std::string>& extra) {
+  std::vector<std::string> argv = {
+      BinPath("robot_agent"), "--scenario", SourcePath("config/paper_two_robots.yaml"), "--robot", "r1", "--domain",
+      std::to_string(domain)};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return argv;
+}
 
 }  // namespace mrslam::testing
