@@ -138,6 +138,13 @@ class Notifier {
   std::uint64_t generation_ = 0;
 };
 
+// When a sample was written (the writer's clock, DDS's source timestamp) and when this process
+// received it, in nanoseconds since the Unix epoch (system clocks: comparable on one host).
+struct SampleTimes {
+  std::int64_t written_ns = 0;
+  std::int64_t received_ns = 0;
+};
+
 // A typed reader that queues every valid sample as it arrives (listener thread) for the owner
 // to take (its own thread), with a timeout. Never throws out of the listener.
 template <typename PubSubType>
@@ -158,17 +165,22 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
 
-  // Takes the oldest queued sample (and, if asked, the participant that wrote it); waits up to
-  // timeout. False on timeout.
-  bool Take(Msg* out, std::chrono::milliseconds timeout, common::WriterId* writer = nullptr) {
+  // Takes the oldest queued sample (and, if asked, the participant that wrote it and when it was
+  // written and received); waits up to timeout. False on timeout.
+  bool Take(Msg* out, std::chrono::milliseconds timeout, common::WriterId* writer = nullptr,
+            SampleTimes* times = nullptr) {
     std::unique_lock<std::mutex> lock(mutex_);
     if (!cv_.wait_for(lock, timeout, [this] { return !queue_.empty(); })) return false;
-    *out = std::move(queue_.front().first);
-    if (writer != nullptr) *writer = queue_.front().second;
+    Received& front = queue_.front();
+    *out = std::move(front.msg);
+    if (writer != nullptr) *writer = front.writer;
+    if (times != nullptr) *times = front.times;
     queue_.pop_front();
     return true;
   }
-  bool TryTake(Msg* out, common::WriterId* writer = nullptr) { return Take(out, std::chrono::milliseconds(0), writer); }
+  bool TryTake(Msg* out, common::WriterId* writer = nullptr, SampleTimes* times = nullptr) {
+    return Take(out, std::chrono::milliseconds(0), writer, times);
+  }
   int MatchedWriters() const {
     eprosima::fastdds::dds::SubscriptionMatchedStatus s;
     reader_->get_subscription_matched_status(s);
@@ -180,12 +192,12 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
     eprosima::fastdds::dds::SampleInfo info;
     while (reader->take_next_sample(&msg, &info) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
-      common::WriterId writer{};
+      Received received{std::move(msg), {}, {info.source_timestamp.to_ns(), NowNs()}};
       const auto& prefix = info.sample_identity.writer_guid().guidPrefix.value;
-      std::copy(std::begin(prefix), std::end(prefix), writer.begin());
+      std::copy(std::begin(prefix), std::end(prefix), received.writer.begin());
       {
         std::lock_guard<std::mutex> lock(mutex_);
-        queue_.emplace_back(msg, writer);
+        queue_.push_back(std::move(received));
       }
       cv_.notify_all();
       if (notifier_ != nullptr) notifier_->Notify();
@@ -193,12 +205,22 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   }
 
  private:
+  struct Received {
+    Msg msg;
+    common::WriterId writer{};
+    SampleTimes times;
+  };
+  static std::int64_t NowNs() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  }
+
   Participant& participant_;
   Notifier* notifier_;
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;
   std::mutex mutex_;
   std::condition_variable cv_;
-  std::deque<std::pair<Msg, common::WriterId>> queue_;
+  std::deque<Received> queue_;
 };
 
 // Topic names (docs/dds.md).

@@ -22,6 +22,7 @@
 #include "common/app.h"
 #include "common/config/scenario_flags.h"
 #include "common/config/scenario_options.h"
+#include "common/cpu_clock.h"
 #include "common/dds/participant.h"
 #include "common/progress_line.h"
 #include "common/seed_range.h"
@@ -218,9 +219,15 @@ bool StartEvaluator(ProcessSupervisor* children, const RunArgs& run, ProgressMon
   return true;
 }
 
-// Reads the summary the evaluator wrote into dir, adds the run's wall time and DDS domain, and
+// The run's wall time and the CPU time of all its processes (the launcher's included).
+struct RunCost {
+  double wall_s = 0.0;
+  double cpu_s = 0.0;
+};
+
+// Reads the summary the evaluator wrote into dir, adds the run's cost and DDS domain, and
 // writes it back. Returns kOk (and the summary) or kFailed.
-int FinishSummary(const std::string& dir, double wall_s, int domain, json* summary_out) {
+int FinishSummary(const std::string& dir, const RunCost& cost, int domain, json* summary_out) {
   const std::string summary_path = dir + "/summary.json";
   std::ifstream in(summary_path);
   if (!in) {
@@ -237,7 +244,9 @@ int FinishSummary(const std::string& dir, double wall_s, int domain, json* summa
   }
   in.close();
   if (summary.contains("wall_seconds")) summary["evaluator_wall_seconds"] = summary["wall_seconds"];
-  summary["wall_seconds"] = wall_s;
+  summary["wall_seconds"] = cost.wall_s;
+  summary["cpu_seconds"] = cost.cpu_s;
+  summary["cpu_cores_mean"] = cost.wall_s > 0.0 ? cost.cpu_s / cost.wall_s : 0.0;
   summary["dds_domain"] = domain;
   {
     const std::string tmp = summary_path + ".tmp";
@@ -260,6 +269,7 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   const RunArgs run = ChildArgs(flags, scenario_path, domain, seed);
 
   const auto start = Clock::now();
+  const double cpu_start = common::ProcessTreeCpuSeconds();
   std::vector<std::string> robot_ids;
   for (const auto& r : scenario.robots) robot_ids.push_back(r.id);
   // The monitor joins first, to see the evaluator join.
@@ -309,7 +319,8 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     if (end.kind == RunEnd::Kind::kStopped) return kStopped;
     return monitor_joined && !first_step_at ? kFailedBeforeStep1 : kFailed;
   }
-  return FinishSummary(dir, Seconds(Clock::now() - start), domain, summary_out);
+  const RunCost cost{Seconds(Clock::now() - start), common::ProcessTreeCpuSeconds() - cpu_start};
+  return FinishSummary(dir, cost, domain, summary_out);
 }
 
 // What a finished seed prints: one line in a multi-seed run, else the summary table, the outputs

@@ -11,6 +11,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -133,6 +134,10 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
   EXPECT_EQ(summary.value("steps", -1), kShortSteps);
   ASSERT_TRUE(summary.contains("wall_seconds"));
   EXPECT_GT(summary["wall_seconds"].get<double>(), 0.0);
+  // Every process of the run used CPU; at most all cores of the machine on average.
+  ExpectFiniteAtLeast(summary, "cpu_seconds", 1e-3, "run");
+  ExpectFiniteAtLeast(summary, "cpu_cores_mean", 1e-3, "run");
+  EXPECT_LE(summary["cpu_cores_mean"].get<double>(), static_cast<double>(std::thread::hardware_concurrency()) + 0.5);
   ASSERT_TRUE(summary.contains("robots"));
   for (const std::string id : {"r1", "r2"}) {
     ASSERT_TRUE(summary["robots"].contains(id)) << summary.dump(2);
@@ -151,6 +156,11 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     ExpectFiniteAtLeast(r, "final_trajectory_rmse_m", 1e-9, id);
     EXPECT_NEAR(r["final_trajectory_rmse_m"].get<double>(), r["position_rmse_m"].get<double>(), 1e-9) << id;
     EXPECT_GE(r["step_cpu_ms_p99"].get<double>(), r["step_cpu_ms_median"].get<double>()) << id;
+    // Every estimate travels: positive latency beyond processing, timed at every step; in lockstep
+    // the simulator waits for every estimate, so none comes after the next step's data.
+    ExpectFiniteAtLeast(r, "latency_us_median", 1.0, id);
+    EXPECT_GE(r["latency_us_p99"].get<double>(), r["latency_us_median"].get<double>()) << id;
+    EXPECT_EQ(r.value("late_estimates", -1), 0) << id;
     EXPECT_LT(r["position_rmse_m"].get<double>(), 20.0) << id;  // 12 steps of 0.65 m: a sanity bound
     EXPECT_LT(r["heading_rmse_deg"].get<double>(), 180.0) << id;
     ASSERT_TRUE(r.contains("frames_known") && r["frames_known"].is_array()) << id;

@@ -22,3 +22,8 @@ mrslam_add_test(paper_b_scorer_test
 mrslam_add_test(view_steps_test
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/view_steps_test.cc
   LIBS mrslam_run_evaluator)
+
+# The delivery figures of a run (latency beyond processing, late estimates).
+mrslam_add_test(delivery_timing_test
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/delivery_timing_test.cc
+  LIBS mrslam_run_evaluator)

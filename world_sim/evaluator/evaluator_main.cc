@@ -71,25 +71,29 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
     }
     bool got = false;
     msg::GroundTruth t;
-    while (truth_reader.TryTake(&t)) {
-      evaluator.AddTruth(dds::FromMsg(t));
+    dds::SampleTimes times;
+    while (truth_reader.TryTake(&t, nullptr, &times)) {
+      evaluator.AddTruth(dds::FromMsg(t), times.written_ns);
       got = true;
     }
     for (auto& [id, reader] : estimate_readers) {
       msg::Estimate e;
-      while (reader->TryTake(&e)) {
+      while (reader->TryTake(&e, nullptr, &times)) {
         if (e.stamp().robot_id() != id) {
           spdlog::warn("estimate on {}'s topic claims robot '{}': ignored", id, e.stamp().robot_id());
           continue;
         }
-        evaluator.AddEstimate(id, FromEstimateMsg(e));
+        RobotEstimate estimate = FromEstimateMsg(e);
+        estimate.written_ns = times.written_ns;
+        estimate.received_ns = times.received_ns;
+        evaluator.AddEstimate(id, estimate);
         got = true;
       }
     }
     for (auto& [id, reader] : odometry_readers) {
       msg::Odometry o;
-      while (reader->TryTake(&o)) {
-        evaluator.AddOdometry(id, dds::FromMsg(o));
+      while (reader->TryTake(&o, nullptr, &times)) {
+        evaluator.AddOdometry(id, dds::FromMsg(o), times.written_ns);
         got = true;
       }
     }

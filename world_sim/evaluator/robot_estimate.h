@@ -45,6 +45,10 @@ struct RobotEstimate {
   // Samples and peer messages the agent has rejected so far (malformed, stale, not for it).
   std::uint32_t rejected_samples = 0;
   double step_cpu_ms = 0.0;  // the agent's CPU time for this step's estimation
+  // When the agent wrote the message and the evaluator received it (ns since the Unix epoch;
+  // 0 unknown): DeliveryTiming.
+  std::int64_t written_ns = 0;
+  std::int64_t received_ns = 0;
   // Last step: chunks of the agent's final trajectory to come (0: its online path is final).
   std::uint32_t final_trajectory_chunks = 0;
 };

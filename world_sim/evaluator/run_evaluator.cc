@@ -48,14 +48,19 @@ RunEvaluator::RunEvaluator(const common::ScenarioOptions& scenario) : scenario_(
   for (const auto& r : scenario.robots) estimates_[r.id];
 }
 
-void RunEvaluator::AddTruth(const common::GroundTruth& truth) { truth_[truth.stamp.step] = truth; }
+void RunEvaluator::AddTruth(const common::GroundTruth& truth, std::int64_t written_ns) {
+  truth_[truth.stamp.step] = truth;
+  timing_.StepWritten(truth.stamp.step, written_ns);
+}
 
 void RunEvaluator::AddEstimate(const std::string& robot_id, const RobotEstimate& estimate) {
   estimates_[robot_id][estimate.step] = estimate;
+  timing_.EstimateDelivered(robot_id, estimate.step, estimate.written_ns, estimate.received_ns, estimate.step_cpu_ms);
 }
 
-void RunEvaluator::AddOdometry(const std::string& robot_id, const common::Odometry& odometry) {
+void RunEvaluator::AddOdometry(const std::string& robot_id, const common::Odometry& odometry, std::int64_t written_ns) {
   odometry_[robot_id][odometry.stamp.step] = odometry;
+  timing_.SensorWritten(robot_id, odometry.stamp.step, written_ns);
 }
 
 bool RunEvaluator::Complete() const { return Missing().empty(); }
@@ -215,6 +220,10 @@ nlohmann::json RunEvaluator::ScoreRobot(const std::string& id, const std::map<st
   r["steps_scored"] = s.steps_scored;
   r["step_cpu_ms_median"] = step_cpu_ms.empty() ? 0.0 : Median(step_cpu_ms);
   r["step_cpu_ms_p99"] = step_cpu_ms.empty() ? 0.0 : Percentile(step_cpu_ms, 99.0);
+  const DeliverySummary delivery = timing_.Summary(id);
+  r["latency_us_median"] = delivery.latency_us_median;
+  r["latency_us_p99"] = delivery.latency_us_p99;
+  r["late_estimates"] = delivery.late_estimates;
   r["frames_known"] = last != nullptr ? last->frames_known : std::vector<std::string>{};
   r["rejected_samples"] = last != nullptr ? last->rejected_samples : 0U;
   r["rendezvous"] = last != nullptr ? ScoreRendezvous(frame, *last) : nlohmann::json::array();

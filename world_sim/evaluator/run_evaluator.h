@@ -12,6 +12,7 @@
 
 #include "common/config/scenario_options.h"
 #include "common/sensor_types.h"
+#include "world_sim/evaluator/delivery_timing.h"
 #include "world_sim/evaluator/metrics.h"
 #include "world_sim/evaluator/robot_estimate.h"
 #include "world_sim/evaluator/robot_scorer.h"
@@ -34,9 +35,11 @@ class RunEvaluator {
  public:
   explicit RunEvaluator(const common::ScenarioOptions& scenario);
 
-  void AddTruth(const common::GroundTruth& truth);
+  // written_ns: when world_sim wrote the message (DDS's source timestamp, ns since the Unix
+  // epoch; 0 unknown), for the delivery figures (DeliveryTiming).
+  void AddTruth(const common::GroundTruth& truth, std::int64_t written_ns = 0);
   void AddEstimate(const std::string& robot_id, const RobotEstimate& estimate);
-  void AddOdometry(const std::string& robot_id, const common::Odometry& odometry);
+  void AddOdometry(const std::string& robot_id, const common::Odometry& odometry, std::int64_t written_ns = 0);
   // A chunk (0..chunks-1) of a robot's final trajectory.
   void AddFinalTrajectory(const std::string& robot_id, std::uint32_t chunk, std::vector<FinalPose> poses);
 
@@ -73,6 +76,7 @@ class RunEvaluator {
   std::map<std::string, std::map<std::uint32_t, RobotEstimate>> estimates_;
   std::map<std::string, std::map<std::uint32_t, common::Odometry>> odometry_;
   std::map<std::string, std::map<std::uint32_t, std::vector<FinalPose>>> final_chunks_;
+  DeliveryTiming timing_;
 };
 
 }  // namespace mrslam::evaluator

@@ -1,0 +1,63 @@
+#include "world_sim/evaluator/delivery_timing.h"
+
+#include <gtest/gtest.h>
+
+namespace mrslam::evaluator {
+namespace {
+
+constexpr std::int64_t kStart = 1'700'000'000'000'000'000;  // a plausible epoch time, ns
+constexpr std::int64_t kStepNs = 100'000'000;               // 10 Hz
+
+// Steps 1..n written every 100 ms, each robot's odometry 50 us before the step's truth.
+DeliveryTiming Steps(int n) {
+  DeliveryTiming timing;
+  for (int k = 1; k <= n; ++k) {
+    const std::int64_t t = kStart + k * kStepNs;
+    timing.SensorWritten("r1", k, t - 50'000);
+    timing.StepWritten(k, t);
+  }
+  return timing;
+}
+
+TEST(DeliveryTimingTest, LatencyIsReceptionAfterTheStepMinusProcessing) {
+  DeliveryTiming timing = Steps(100);
+  // Step k's estimate: 2 ms of processing, received 2.3 ms + k us after the step was written.
+  for (int k = 1; k <= 100; ++k) {
+    const std::int64_t step_ns = kStart + k * kStepNs;
+    const std::int64_t received = step_ns + 2'300'000 + std::int64_t{k} * 1000;
+    timing.EstimateDelivered("r1", k, received - 10'000, received, 2.0);
+  }
+  const DeliverySummary s = timing.Summary("r1");
+  EXPECT_EQ(s.timed_steps, 100U);
+  // Latencies 300 + k us, k = 1..100: median 350.5, 99th percentile 300 + 1 + 0.99 * 99.
+  EXPECT_NEAR(s.latency_us_median, 350.5, 1e-6);
+  EXPECT_NEAR(s.latency_us_p99, 301.0 + 0.99 * 99.0, 1e-6);
+  EXPECT_EQ(s.late_estimates, 0);
+}
+
+TEST(DeliveryTimingTest, AnEstimateWrittenAfterTheNextStepsSensorDataIsLate) {
+  DeliveryTiming timing = Steps(10);
+  for (int k = 1; k <= 10; ++k) {
+    const std::int64_t next_sensor = kStart + (k + 1) * kStepNs - 50'000;
+    // Steps 3 and 7 are written 1 us after the next step's odometry; the others 1 us before.
+    const std::int64_t written = (k == 3 || k == 7) ? next_sensor + 1000 : next_sensor - 1000;
+    timing.EstimateDelivered("r1", k, written, written + 100'000, 1.0);
+  }
+  EXPECT_EQ(timing.Summary("r1").late_estimates, 2);
+}
+
+TEST(DeliveryTimingTest, UnknownTimesLeaveTheStepOut) {
+  DeliveryTiming timing = Steps(3);
+  timing.StepWritten(4, 0);  // unknown: not recorded
+  timing.EstimateDelivered("r1", 1, 0, kStart + kStepNs + 500'000, 0.2);
+  timing.EstimateDelivered("r1", 2, 0, 0, 0.2);
+  timing.EstimateDelivered("r1", 4, kStart, kStart + 5 * kStepNs, 0.2);
+  const DeliverySummary s = timing.Summary("r1");
+  EXPECT_EQ(s.timed_steps, 1U);  // only step 1 has both a step time and a reception
+  EXPECT_NEAR(s.latency_us_median, 300.0, 1e-6);
+  EXPECT_EQ(s.late_estimates, 0);  // no write time known where the next step's is
+  EXPECT_EQ(timing.Summary("r2").timed_steps, 0U);
+}
+
+}  // namespace
+}  // namespace mrslam::evaluator
