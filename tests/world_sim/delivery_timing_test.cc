@@ -10,7 +10,7 @@ constexpr std::int64_t kStepNs = 100'000'000;               // 10 Hz
 
 // Steps 1..n written every 100 ms, each robot's odometry 50 us before the step's truth.
 DeliveryTiming Steps(int n) {
-  DeliveryTiming timing;
+  DeliveryTiming timing({"r1"});
   for (int k = 1; k <= n; ++k) {
     const std::int64_t t = kStart + k * kStepNs;
     timing.SensorWritten("r1", k, t - 50'000);
@@ -29,6 +29,7 @@ TEST(DeliveryTimingTest, LatencyIsReceptionAfterTheStepMinusProcessing) {
   }
   const DeliverySummary s = timing.Summary("r1");
   EXPECT_EQ(s.timed_steps, 100U);
+  EXPECT_LE(timing.Held(), 2U);  // the last step's times: nothing is kept once it has been used
   // Latencies 300 + k us, k = 1..100: median 350.5, 99th percentile 300 + 1 + 0.99 * 99.
   EXPECT_NEAR(s.latency_us_median, 350.5, 1e-6);
   EXPECT_NEAR(s.latency_us_p99, 301.0 + 0.99 * 99.0, 1e-6);
@@ -44,6 +45,18 @@ TEST(DeliveryTimingTest, AnEstimateWrittenAfterTheNextStepsSensorDataIsLate) {
     timing.EstimateDelivered("r1", k, written, written + 100'000, 1.0);
   }
   EXPECT_EQ(timing.Summary("r1").late_estimates, 2);
+}
+
+TEST(DeliveryTimingTest, AnEstimateBeforeItsStepsTruthIsTimedWhenTheTruthComes) {
+  DeliveryTiming timing({"r1", "r2"});
+  timing.EstimateDelivered("r1", 1, kStart + 900'000, kStart + 1'000'000, 0.5);
+  EXPECT_EQ(timing.Summary("r1").timed_steps, 0U);
+  timing.StepWritten(1, kStart);
+  EXPECT_EQ(timing.Summary("r1").timed_steps, 1U);
+  EXPECT_NEAR(timing.Summary("r1").latency_us_median, 500.0, 1e-6);  // 1000 us less 0.5 ms
+  // r2 has not reported step 1 yet: its time is still held for r2.
+  timing.EstimateDelivered("r2", 1, kStart + 1'900'000, kStart + 2'000'000, 0.25);
+  EXPECT_NEAR(timing.Summary("r2").latency_us_median, 1750.0, 1e-6);
 }
 
 TEST(DeliveryTimingTest, UnknownTimesLeaveTheStepOut) {

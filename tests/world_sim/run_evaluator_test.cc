@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
+#include <vector>
 
 #include "common/angles.h"
 
@@ -34,7 +37,7 @@ class RunEvaluatorTest : public ::testing::Test {
 
   // Scores the run in which r1 knows the frames in r1_frames_known.
   nlohmann::json Score(const std::vector<std::string>& r1_frames_known) const {
-    RunEvaluator evaluator(scenario_);
+    RunEvaluator evaluator(scenario_, out_dir_);
     for (std::uint32_t step = 0; step <= 1; ++step) {
       common::GroundTruth truth;
       truth.stamp.step = step;
@@ -60,7 +63,7 @@ class RunEvaluatorTest : public ::testing::Test {
       }
     }
     EXPECT_TRUE(evaluator.Complete()) << evaluator.Missing();
-    return evaluator.Write(out_dir_, 0.0);
+    return evaluator.Finish(0.0);
   }
 
   common::ScenarioOptions scenario_;
@@ -92,7 +95,7 @@ TEST_F(RunEvaluatorTest, StepCpuTimeIsSummarizedByMedianAndP99) {
 }
 
 TEST_F(RunEvaluatorTest, AnAnnouncedFinalTrajectoryIsAwaitedAndScored) {
-  RunEvaluator evaluator(scenario_);
+  RunEvaluator evaluator(scenario_, out_dir_);
   common::GroundTruth truth;
   truth.robots = {{"r1", {0.0, 0.0, 0.0}, false}, {"r2", {10.0, 0.0, 0.0}, false}};
   truth.frames = {{"r1", {0.0, 0.0, 0.0}}, {"r2", {10.0, 0.0, 0.0}}};
@@ -116,13 +119,108 @@ TEST_F(RunEvaluatorTest, AnAnnouncedFinalTrajectoryIsAwaitedAndScored) {
   EXPECT_FALSE(evaluator.Complete());
   evaluator.AddFinalTrajectory("r1", 0, {{0, 0.0, {0.0, 0.0, 0.0}}});
   ASSERT_TRUE(evaluator.Complete()) << evaluator.Missing();
-  const nlohmann::json summary = evaluator.Write(out_dir_, 0.0);
+  const nlohmann::json summary = evaluator.Finish(0.0);
   // r1: its final trajectory is 0 and 0.1 m off; r2, a filter, is scored on its online path.
   EXPECT_NEAR(summary["robots"]["r1"]["final_trajectory_rmse_m"].get<double>(), std::sqrt(0.01 / 2.0), 1e-12);
   EXPECT_NEAR(summary["robots"]["r1"]["position_rmse_m"].get<double>(), 0.5, 1e-12);
   EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["final_trajectory_rmse_m"].get<double>(),
                    summary["robots"]["r2"]["position_rmse_m"].get<double>());
   EXPECT_TRUE(std::filesystem::exists(out_dir_ + "/trajectories/r1_final.tum"));
+}
+
+// The steps of a two-robot run standing still: truth, both estimates and odometry of step k.
+struct StillStep {
+  common::GroundTruth truth;
+  RobotEstimate r1, r2;
+  common::Odometry odometry;
+};
+StillStep StillAt(std::uint32_t step) {
+  StillStep s;
+  s.truth.stamp.step = step;
+  s.truth.stamp.time_s = 0.5 * step;
+  s.truth.robots = {{"r1", {0.0, 0.0, 0.0}, false}, {"r2", {10.0, 0.0, 0.0}, false}};
+  s.truth.landmarks = {{"1", {1.0, 0.0, 0.0}, false}, {"2", {11.0, 0.0, 0.0}, false}};
+  s.truth.frames = {{"r1", {0.0, 0.0, 0.0}}, {"r2", {10.0, 0.0, 0.0}}};
+  s.r1.step = s.r2.step = step;
+  s.r1.time_s = s.r2.time_s = 0.5 * step;
+  s.r1.pose = {0.01 * step, 0.0, 0.0};  // drifting away
+  s.r1.landmarks = {{Eigen::Vector2d(1.0, 0.0), 1}};
+  s.odometry.stamp.step = step;
+  s.odometry.segments = {{0.5 * step, 0.5, 0.1, 0.0}};  // commanded forward, standing still
+  return s;
+}
+
+std::vector<nlohmann::json> ReadLines(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<nlohmann::json> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(nlohmann::json::parse(line));
+  return lines;
+}
+
+TEST_F(RunEvaluatorTest, ItsMemoryDoesNotGrowWithTheRunAndTheViewIsOneLinePerStep) {
+  scenario_.run.steps = 2000;
+  RunEvaluator evaluator(scenario_, out_dir_);
+  std::size_t most_pending = 0;
+  for (std::uint32_t step = 0; step <= 2000; ++step) {
+    const StillStep s = StillAt(step);
+    if (step > 0) evaluator.AddOdometry("r1", s.odometry);
+    if (step > 0) evaluator.AddOdometry("r2", s.odometry);
+    evaluator.AddTruth(s.truth);
+    evaluator.AddEstimate("r1", s.r1);
+    evaluator.AddEstimate("r2", s.r2);
+    most_pending = std::max(most_pending, evaluator.Pending());
+  }
+  ASSERT_TRUE(evaluator.Complete()) << evaluator.Missing();
+  EXPECT_LE(most_pending, 3U);  // a step's truth and estimates at most, however long the run
+  const nlohmann::json summary = evaluator.Finish(0.0);
+  EXPECT_EQ(summary["robots"]["r1"]["steps_scored"].get<int>(), 2001);
+  const auto lines = ReadLines(out_dir_ + "/view.jsonl");
+  ASSERT_EQ(lines.size(), 2002U);  // the header, then steps 0..2000 in order
+  EXPECT_EQ(lines[0]["scenario"], "run_evaluator_test");
+  for (std::uint32_t step = 0; step <= 2000; step += 250) {
+    EXPECT_EQ(lines[step + 1]["step"], step);
+    EXPECT_EQ(lines[step + 1]["truth"]["step"], step);
+    EXPECT_EQ(lines[step + 1]["estimates"]["r2"]["step"], step);
+  }
+}
+
+TEST_F(RunEvaluatorTest, TheOrderInWhichDataArriveDoesNotChangeTheScores) {
+  scenario_.run.steps = 40;
+  std::vector<StillStep> steps;
+  for (std::uint32_t step = 0; step <= 40; ++step) steps.push_back(StillAt(step));
+  nlohmann::json in_order;
+  {
+    RunEvaluator evaluator(scenario_, out_dir_);
+    for (const auto& s : steps) {
+      if (s.truth.stamp.step > 0) evaluator.AddOdometry("r1", s.odometry);
+      if (s.truth.stamp.step > 0) evaluator.AddOdometry("r2", s.odometry);
+      evaluator.AddTruth(s.truth);
+      evaluator.AddEstimate("r1", s.r1);
+      evaluator.AddEstimate("r2", s.r2);
+    }
+    in_order = evaluator.Finish(0.0);
+  }
+  // r2's estimates all first, then r1's, each estimate before its truth and odometry, r1's
+  // estimates of steps 5..9 sent twice (an agent that came back).
+  RunEvaluator evaluator(scenario_, out_dir_);
+  for (const auto& s : steps) evaluator.AddEstimate("r2", s.r2);
+  for (const auto& s : steps) {
+    evaluator.AddEstimate("r1", s.r1);
+    if (s.truth.stamp.step >= 10 && s.truth.stamp.step < 15)
+      evaluator.AddEstimate("r1", steps[s.truth.stamp.step - 5].r1);
+    evaluator.AddTruth(s.truth);
+    if (s.truth.stamp.step > 0) evaluator.AddOdometry("r2", s.odometry);
+    if (s.truth.stamp.step > 0) evaluator.AddOdometry("r1", s.odometry);
+  }
+  ASSERT_TRUE(evaluator.Complete()) << evaluator.Missing();
+  nlohmann::json shuffled = evaluator.Finish(0.0);
+  for (const std::string id : {"r1", "r2"}) {
+    for (const std::string key : {"position_rmse_m", "dead_reckoning_rmse_m", "landmark_rmse_m", "steps_scored"}) {
+      EXPECT_EQ(shuffled["robots"][id][key], in_order["robots"][id][key]) << id << " " << key;
+    }
+  }
+  EXPECT_GT(in_order["robots"]["r1"]["position_rmse_m"].get<double>(), 0.1);
+  EXPECT_GT(in_order["robots"]["r1"]["dead_reckoning_rmse_m"].get<double>(), 1.0);
 }
 
 }  // namespace

@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -92,27 +91,6 @@ TEST(ViewStepsTest, NumbersKeepSixSignificantDigits) {
   input.estimates = {{"r1", &estimate}};
   EXPECT_EQ(ViewStep(input)["estimates"]["r1"]["pose"], json::array({123.457, 1.23457e-5, -0.333333}));
   EXPECT_TRUE(ViewStep(input)["truth"].is_null());
-}
-
-TEST(ViewStepsTest, LinesAreTheHeaderThenOneStepPerLineInStepOrder) {
-  const std::map<std::uint32_t, common::GroundTruth> truth = {{0, TruthAt(0)}, {1, TruthAt(1)}, {2, TruthAt(2)}};
-  const std::map<std::string, std::map<std::uint32_t, RobotEstimate>> estimates = {
-      {"r1", {{1, EstimateAt(1)}, {2, EstimateAt(2)}}}};
-  std::ostringstream out;
-  WriteViewLines(out, json{{"scenario", "s"}}, truth, estimates);
-  std::istringstream in(out.str());
-  std::vector<json> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(json::parse(line));
-  ASSERT_EQ(lines.size(), 4U);
-  EXPECT_EQ(lines[0]["scenario"], "s");
-  for (std::uint32_t step = 0; step <= 2; ++step) {
-    EXPECT_EQ(lines[step + 1]["step"], step);
-    EXPECT_EQ(lines[step + 1]["truth"]["step"], step);
-    EXPECT_DOUBLE_EQ(lines[step + 1]["time_s"].get<double>(), 0.5 * step);
-  }
-  EXPECT_FALSE(lines[1]["estimates"].contains("r1"));  // none at step 0
-  EXPECT_EQ(lines[3]["estimates"]["r1"]["step"], 2);
-  EXPECT_FALSE(lines[3].contains("lidar"));  // the evaluator has no scans
 }
 
 }  // namespace

@@ -1,45 +1,98 @@
 #include "world_sim/evaluator/delivery_timing.h"
 
-#include <vector>
+#include <algorithm>
+#include <cmath>
 
 #include "world_sim/evaluator/metrics.h"
 
 namespace mrslam::evaluator {
 
+DeliveryTiming::DeliveryTiming(const std::vector<std::string>& robot_ids) {
+  for (const auto& id : robot_ids) robots_[id];
+}
+
 void DeliveryTiming::StepWritten(std::uint32_t step, std::int64_t written_ns) {
-  if (written_ns > 0) steps_[step] = written_ns;
+  if (written_ns <= 0) return;
+  steps_[step] = written_ns;
+  for (auto& [id, robot] : robots_) {
+    const auto arrival = robot.arrival_ns.find(step);
+    if (arrival == robot.arrival_ns.end()) continue;
+    robot.latency_us.push_back(static_cast<double>(arrival->second - written_ns) * 1e-3);
+    robot.arrival_ns.erase(arrival);
+  }
+  Prune();
 }
 
 void DeliveryTiming::SensorWritten(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns) {
-  if (written_ns > 0) sensors_[robot_id][step] = written_ns;
+  RobotTiming& robot = robots_.at(robot_id);
+  if (written_ns <= 0 || (robot.any_estimate && step <= robot.newest_estimate)) return;
+  robot.sensor_written[step] = written_ns;
+  if (step > 0) JudgeLate(&robot, step - 1);
 }
 
 void DeliveryTiming::EstimateDelivered(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns,
                                        std::int64_t received_ns, double processing_ms) {
-  estimates_[robot_id][step] = {written_ns, received_ns, processing_ms};
+  RobotTiming& robot = robots_.at(robot_id);
+  if (received_ns > 0) {
+    // Nanoseconds since the epoch exceed a double's exact integers: differences first.
+    const std::int64_t arrival = received_ns - std::llround(processing_ms * 1e6);
+    const auto written = steps_.find(step);
+    if (written != steps_.end()) {
+      robot.latency_us.push_back(static_cast<double>(arrival - written->second) * 1e-3);
+    } else {
+      robot.arrival_ns[step] = arrival;
+    }
+  }
+  if (written_ns > 0) {
+    robot.estimate_written[step] = written_ns;
+    JudgeLate(&robot, step);
+  }
+  robot.any_estimate = true;
+  robot.newest_estimate = std::max(robot.newest_estimate, step);
+  // Sensor data of steps up to this one can no longer meet an earlier estimate.
+  robot.sensor_written.erase(robot.sensor_written.begin(), robot.sensor_written.upper_bound(step));
+  Prune();
+}
+
+void DeliveryTiming::JudgeLate(RobotTiming* robot, std::uint32_t step) {
+  const auto estimate = robot->estimate_written.find(step);
+  const auto next = robot->sensor_written.find(step + 1);
+  if (estimate == robot->estimate_written.end() || next == robot->sensor_written.end()) return;
+  if (estimate->second > next->second) ++robot->late;
+  robot->estimate_written.erase(estimate);
+  robot->sensor_written.erase(next);
+}
+
+void DeliveryTiming::Prune() {
+  std::uint32_t all_past = 0;  // every robot's estimates of steps before it are in or lost
+  bool first = true;
+  for (const auto& [id, robot] : robots_) {
+    const std::uint32_t past = robot.any_estimate ? robot.newest_estimate + 1 : 0;
+    all_past = first ? past : std::min(all_past, past);
+    first = false;
+  }
+  steps_.erase(steps_.begin(), steps_.lower_bound(all_past));
 }
 
 DeliverySummary DeliveryTiming::Summary(const std::string& robot_id) const {
   DeliverySummary out;
-  const auto estimates = estimates_.find(robot_id);
-  if (estimates == estimates_.end()) return out;
-  const auto sensors = sensors_.find(robot_id);
-  std::vector<double> latency_us;
-  for (const auto& [step, d] : estimates->second) {
-    const auto written = steps_.find(step);
-    if (written != steps_.end() && d.received_ns > 0) {
-      latency_us.push_back(static_cast<double>(d.received_ns - written->second) * 1e-3 - d.processing_ms * 1e3);
-    }
-    if (sensors == sensors_.end() || d.written_ns <= 0) continue;
-    const auto next = sensors->second.find(step + 1);
-    if (next != sensors->second.end() && d.written_ns > next->second) ++out.late_estimates;
-  }
-  out.timed_steps = latency_us.size();
-  if (!latency_us.empty()) {
-    out.latency_us_median = Median(latency_us);
-    out.latency_us_p99 = Percentile(latency_us, 99.0);
+  const auto robot = robots_.find(robot_id);
+  if (robot == robots_.end()) return out;
+  out.late_estimates = robot->second.late;
+  out.timed_steps = robot->second.latency_us.size();
+  if (!robot->second.latency_us.empty()) {
+    out.latency_us_median = Median(robot->second.latency_us);
+    out.latency_us_p99 = Percentile(robot->second.latency_us, 99.0);
   }
   return out;
+}
+
+std::size_t DeliveryTiming::Held() const {
+  std::size_t n = steps_.size();
+  for (const auto& [id, robot] : robots_) {
+    n += robot.sensor_written.size() + robot.estimate_written.size() + robot.arrival_ns.size();
+  }
+  return n;
 }
 
 }  // namespace mrslam::evaluator

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <vector>
 
 // How fast a run's estimates reached the evaluator, from DDS's timestamps (no DDS types here).
 namespace mrslam::evaluator {
@@ -16,33 +17,47 @@ struct DeliverySummary {
   std::size_t timed_steps = 0;  // the steps whose latency is known
 };
 
-// Collects when world_sim wrote each step and each robot's sensor data, and when each estimate
-// was written by its agent and received here; reports per robot:
+// Takes when world_sim wrote each step and each robot's sensor data, and when each estimate was
+// written by its agent and received here; reports per robot:
 // - latency: received(estimate of step k) - written(step k) - the agent's processing time of the
 //   step, where written(step k) is world_sim's write of the step's truth, which it writes
 //   immediately before the step's clock (so the figure errs high by that gap, microseconds);
 // - late estimates: estimates of step k written after world_sim wrote step k + 1's first sensor
 //   message for that robot (its odometry), i.e. after the next step's data started to flow.
 // Times are nanoseconds since the Unix epoch from the system clock, comparable on one host; 0
-// means unknown and leaves the step out. Pure.
+// means unknown and leaves the step out. Each robot's estimates come in step order. A time is
+// held only until what it is compared with arrives (or can no longer arrive): per step only each
+// robot's latency stays (for the percentiles). Pure.
 class DeliveryTiming {
  public:
+  explicit DeliveryTiming(const std::vector<std::string>& robot_ids);
+
   void StepWritten(std::uint32_t step, std::int64_t written_ns);
   void SensorWritten(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns);
   void EstimateDelivered(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns,
                          std::int64_t received_ns, double processing_ms);
 
   DeliverySummary Summary(const std::string& robot_id) const;
+  // Times held, waiting for their counterpart.
+  std::size_t Held() const;
 
  private:
-  struct Delivery {
-    std::int64_t written_ns = 0;
-    std::int64_t received_ns = 0;
-    double processing_ms = 0.0;
+  struct RobotTiming {
+    std::map<std::uint32_t, std::int64_t> sensor_written;    // awaiting the previous step's estimate
+    std::map<std::uint32_t, std::int64_t> estimate_written;  // awaiting the next step's sensor data
+    std::map<std::uint32_t, std::int64_t> arrival_ns;        // received - processing, awaiting the step
+    bool any_estimate = false;
+    std::uint32_t newest_estimate = 0;
+    std::vector<double> latency_us;
+    int late = 0;
   };
+  // Judges whether the estimate of step k was late, if both times are known; lets them go.
+  static void JudgeLate(RobotTiming* robot, std::uint32_t step);
+  // Lets go of the steps' times every robot is past.
+  void Prune();
+
   std::map<std::uint32_t, std::int64_t> steps_;
-  std::map<std::string, std::map<std::uint32_t, std::int64_t>> sensors_;
-  std::map<std::string, std::map<std::uint32_t, Delivery>> estimates_;
+  std::map<std::string, RobotTiming> robots_;
 };
 
 }  // namespace mrslam::evaluator

@@ -59,7 +59,7 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
     final_readers[r.id] = std::make_unique<dds::Reader<msg::FinalTrajectoryPubSubType>>(
         participant, dds::FinalTrajectoryTopic(r.id), &notifier);
   }
-  RunEvaluator evaluator(scenario);
+  RunEvaluator evaluator(scenario, out_dir);
   std::uint64_t seen = 0;
   auto last_data = Clock::now();
   const auto timeout = std::chrono::duration<double>(scenario.run.ack_timeout_s * 2.0);
@@ -118,7 +118,7 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
     notifier.Wait(&seen, std::chrono::milliseconds(100));
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
-  const auto summary = evaluator.Write(out_dir, wall);
+  const auto summary = evaluator.Finish(wall);
   for (const auto& [id, r] : summary["robots"].items()) {
     spdlog::info("{}: position RMSE {:.3f} m, heading RMSE {:.2f} deg, landmark RMSE {:.3f} m, dead reckoning {:.3f} m",
                  id, r["position_rmse_m"].get<double>(), r["heading_rmse_deg"].get<double>(),

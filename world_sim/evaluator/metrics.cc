@@ -198,6 +198,8 @@ double Rmse(const std::vector<double>& errors) {
   return std::sqrt(sum_sq / static_cast<double>(errors.size()));
 }
 
+double RunningRmse::Value() const { return count_ == 0 ? 0.0 : std::sqrt(sum_sq_ / static_cast<double>(count_)); }
+
 double Median(std::vector<double> values) { return Percentile(std::move(values), 50.0); }
 
 // Sorted x_0 <= ... <= x_{n-1}, rank r = p / 100 * (n - 1), lo = floor(r):

@@ -1,8 +1,10 @@
 #pragma once
 
-#include <Eigen/Core>
+#include <cstddef>
 #include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "common/se2.h"
 
@@ -73,6 +75,22 @@ std::vector<int> OptimalAssignment(const Eigen::MatrixXd& cost);
 
 // Root mean square of a set of values (0 for none).
 double Rmse(const std::vector<double>& errors);
+
+// The root mean square of errors added one at a time, without keeping them: equal to Rmse of
+// the same errors in the same order, bit for bit.
+class RunningRmse {
+ public:
+  void Add(double error) {
+    sum_sq_ += error * error;
+    ++count_;
+  }
+  double Value() const;
+  std::size_t count() const { return count_; }
+
+ private:
+  double sum_sq_ = 0.0;
+  std::size_t count_ = 0;
+};
 // Median and p-th percentile (p in [0, 100], linear interpolation between the closest ranks as
 // numpy's default: rank r = p / 100 * (n - 1)); NaN for no values.
 double Median(std::vector<double> values);

@@ -24,14 +24,17 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
   s.position_err_m = PositionError(pose, s.truth_own);
   s.heading_err_rad = HeadingError(pose, s.truth_own);
   s.nees = covariance ? PoseNees(pose, *covariance, s.truth_own) : std::nan("");
-  position_err_.push_back(s.position_err_m);
-  heading_err_deg_.push_back(common::DegFromRad(s.heading_err_rad));
-  if (std::isfinite(s.nees)) nees_.push_back(s.nees);
+  position_err_.Add(s.position_err_m);
+  heading_err_deg_.Add(common::DegFromRad(s.heading_err_rad));
+  if (std::isfinite(s.nees)) {
+    nees_sum_ += s.nees;
+    ++nees_count_;
+  }
   if (odometry != nullptr) {
     for (const auto& g : odometry->segments) {
       dead_reckoning_ = common::UnicycleStep(dead_reckoning_, g.v_mps, g.w_radps, g.dt_s);
     }
-    dead_reckoning_err_.push_back(PositionError(dead_reckoning_, s.truth_own));
+    dead_reckoning_err_.Add(PositionError(dead_reckoning_, s.truth_own));
   }
   std::vector<TruePoint> true_points;
   std::vector<bool> moving;
@@ -47,10 +50,10 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
   for (const LandmarkMatch& match : MatchLandmarks(landmarks, true_points, frame_)) {
     s.landmark_errors_m.push_back(match.error_m);
     const bool mover = match.truth_index >= 0 && moving[static_cast<std::size_t>(match.truth_index)];
-    (mover ? moving_landmark_err_ : static_landmark_err_).push_back(match.error_m);
+    (mover ? moving_landmark_err_ : static_landmark_err_).Add(match.error_m);
     if (match.truth_index >= 0) in_map_.insert(true_points[static_cast<std::size_t>(match.truth_index)].landmark_id);
   }
-  landmark_err_.insert(landmark_err_.end(), s.landmark_errors_m.begin(), s.landmark_errors_m.end());
+  for (const double e : s.landmark_errors_m) landmark_err_.Add(e);
   completeness_ = Completeness(seen_, in_map_);
   moving_completeness_ = Completeness(seen_moving_, in_map_);
   s.map_completeness = completeness_;
@@ -67,19 +70,17 @@ double RobotScorer::Completeness(const std::set<int>& seen, const std::set<int>&
 
 RobotSummary RobotScorer::Summary() const {
   RobotSummary r;
-  r.position_rmse_m = Rmse(position_err_);
-  r.heading_rmse_deg = Rmse(heading_err_deg_);
-  r.landmark_rmse_m = Rmse(landmark_err_);
-  r.static_landmark_rmse_m = Rmse(static_landmark_err_);
-  r.moving_landmark_rmse_m = Rmse(moving_landmark_err_);
-  r.dead_reckoning_rmse_m = Rmse(dead_reckoning_err_);
-  double nees_sum = 0.0;
-  for (const double v : nees_) nees_sum += v;
-  r.mean_nees = nees_.empty() ? 0.0 : nees_sum / static_cast<double>(nees_.size());
+  r.position_rmse_m = position_err_.Value();
+  r.heading_rmse_deg = heading_err_deg_.Value();
+  r.landmark_rmse_m = landmark_err_.Value();
+  r.static_landmark_rmse_m = static_landmark_err_.Value();
+  r.moving_landmark_rmse_m = moving_landmark_err_.Value();
+  r.dead_reckoning_rmse_m = dead_reckoning_err_.Value();
+  r.mean_nees = nees_count_ == 0 ? 0.0 : nees_sum_ / static_cast<double>(nees_count_);
   r.landmarks_mapped = mapped_;
   r.map_completeness = completeness_;
   r.moving_completeness = moving_completeness_;
-  r.steps_scored = position_err_.size();
+  r.steps_scored = position_err_.count();
   return r;
 }
 

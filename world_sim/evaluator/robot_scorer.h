@@ -72,8 +72,11 @@ class RobotScorer {
   // Completeness at this step: the share of `seen` that is in the map (1 for none seen).
   static double Completeness(const std::set<int>& seen, const std::set<int>& in_map);
 
-  std::vector<double> position_err_, heading_err_deg_, landmark_err_, dead_reckoning_err_, nees_;
-  std::vector<double> static_landmark_err_, moving_landmark_err_;
+  // Running figures only: the scorer's memory does not grow with the run.
+  RunningRmse position_err_, heading_err_deg_, landmark_err_, dead_reckoning_err_;
+  RunningRmse static_landmark_err_, moving_landmark_err_;
+  double nees_sum_ = 0.0;
+  std::size_t nees_count_ = 0;
   std::set<int> seen_;         // true landmark ids ever within the robot's reach
   std::set<int> seen_moving_;  // the moving ones among them
   std::set<int> in_map_;       // true landmark ids in the map at the last step

@@ -1,5 +1,6 @@
 #include "world_sim/evaluator/run_evaluator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -42,156 +43,258 @@ void OpenOrThrow(std::ofstream& out, const std::filesystem::path& path) {
   if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
 }
 
+std::vector<std::string> RobotIds(const common::ScenarioOptions& scenario) {
+  std::vector<std::string> ids;
+  for (const auto& r : scenario.robots) ids.push_back(r.id);
+  return ids;
+}
+
 }  // namespace
 
-RunEvaluator::RunEvaluator(const common::ScenarioOptions& scenario) : scenario_(scenario) {
-  for (const auto& r : scenario.robots) estimates_[r.id];
+RunEvaluator::RunEvaluator(const common::ScenarioOptions& scenario, const std::string& out_dir)
+    : scenario_(scenario), out_dir_(out_dir), timing_(RobotIds(scenario)) {
+  const std::filesystem::path out(out_dir);
+  std::filesystem::create_directories(out / "trajectories");
+  OpenOrThrow(metrics_, out / "metrics.csv");
+  OpenOrThrow(tracks_, out / "tracks.csv");
+  OpenOrThrow(view_, out / "view.jsonl");
+  metrics_ << "step,time_s,robot,x_err_m,y_err_m,position_err_m,heading_err_deg,sigma_x_m,sigma_y_m,"
+              "sigma_heading_deg,nees,landmark_rmse_m,landmarks_mapped,map_completeness,ess\n";
+  tracks_ << "step,robot,kind,id,x_m,y_m\n";
+  view_ << ViewHeader(scenario_).dump() << "\n";
+  for (const auto& r : scenario.robots) {
+    RobotRun& robot = robots_[r.id];
+    OpenOrThrow(robot.tum_estimate, out / "trajectories" / (r.id + "_estimate.tum"));
+    OpenOrThrow(robot.tum_truth, out / "trajectories" / (r.id + "_truth.tum"));
+    OpenOrThrow(robot.tum_final, out / "trajectories" / (r.id + "_final.tum"));
+  }
+}
+
+void RunEvaluator::Start(const common::GroundTruth& truth0) {
+  frame_g1_ = FrameOf(truth0, scenario_.robots.front().id);
+  for (auto& [id, robot] : robots_) {
+    robot.frame = FrameOf(truth0, id);
+    // Dead reckoning from the true initial pose in the robot's own frame.
+    const auto* r0 = FindEntity(truth0.robots, id);
+    robot.scorer.emplace(robot.frame, r0 != nullptr ? TruthInOwnFrame(r0->pose, robot.frame) : Pose2{},
+                         scenario_.sensors.lidar);
+  }
+  started_ = true;
 }
 
 void RunEvaluator::AddTruth(const common::GroundTruth& truth, std::int64_t written_ns) {
-  truth_[truth.stamp.step] = truth;
-  timing_.StepWritten(truth.stamp.step, written_ns);
+  ++received_;
+  const std::uint32_t step = truth.stamp.step;
+  if (truth_steps_ > 0 && step <= newest_truth_ && truth_.count(step) == 0) return;  // a step let go
+  if (!started_) Start(truth);
+  if (truth_.emplace(step, truth).second) ++truth_steps_;
+  newest_truth_ = std::max(newest_truth_, step);
+  timing_.StepWritten(step, written_ns);
+  for (const auto& l : truth.landmarks) {
+    const auto p = TransformPoint(common::Inverse(frame_g1_), l.pose.Translation());
+    tracks_ << fmt::format("{},world,truth_landmark,{},{:.4f},{:.4f}\n", step, l.id, p.x(), p.y());
+  }
+  for (const auto& rt : truth.robots) {
+    const auto robot = robots_.find(rt.id);
+    if (robot == robots_.end()) continue;
+    robot->second.truth_own[step] = TruthInOwnFrame(rt.pose, robot->second.frame);
+    for (const auto& l : truth.landmarks) {
+      if (InLidarReach(scenario_.sensors.lidar, rt.pose, l.pose.Translation()))
+        robot->second.reached.insert(std::stoi(l.id));
+    }
+  }
+  Advance(false);
 }
 
 void RunEvaluator::AddEstimate(const std::string& robot_id, const RobotEstimate& estimate) {
-  estimates_[robot_id][estimate.step] = estimate;
+  ++received_;
+  RobotRun& robot = robots_.at(robot_id);
+  if (estimate.step < robot.next_step || robot.pending.count(estimate.step) > 0) return;
+  robot.pending[estimate.step] = estimate;
+  ++robot.estimates;
+  robot.newest_estimate = std::max(robot.newest_estimate, estimate.step);
+  if (estimate.step == static_cast<std::uint32_t>(scenario_.run.steps)) {
+    robot.last_step_in = true;
+    robot.final_chunks_announced = estimate.final_trajectory_chunks;
+  }
   timing_.EstimateDelivered(robot_id, estimate.step, estimate.written_ns, estimate.received_ns, estimate.step_cpu_ms);
+  Advance(false);
 }
 
 void RunEvaluator::AddOdometry(const std::string& robot_id, const common::Odometry& odometry, std::int64_t written_ns) {
-  odometry_[robot_id][odometry.stamp.step] = odometry;
-  timing_.SensorWritten(robot_id, odometry.stamp.step, written_ns);
+  ++received_;
+  RobotRun& robot = robots_.at(robot_id);
+  const std::uint32_t step = odometry.stamp.step;
+  if (step < robot.next_step || !robot.odometry.emplace(step, odometry).second) return;
+  ++robot.odometry_steps;
+  robot.newest_odometry = std::max(robot.newest_odometry, step);
+  timing_.SensorWritten(robot_id, step, written_ns);
+  Advance(false);
+}
+
+void RunEvaluator::AddFinalTrajectory(const std::string& robot_id, std::uint32_t chunk, std::vector<FinalPose> poses) {
+  ++received_;
+  robots_.at(robot_id).final_chunks[chunk] = std::move(poses);
 }
 
 bool RunEvaluator::Complete() const { return Missing().empty(); }
 
-void RunEvaluator::AddFinalTrajectory(const std::string& robot_id, std::uint32_t chunk, std::vector<FinalPose> poses) {
-  final_chunks_[robot_id][chunk] = std::move(poses);
-}
-
-double RunEvaluator::ScoreFinalTrajectory(const std::string& id, const Pose2& frame, const std::string& out_dir) const {
-  std::vector<FinalPose> path;
-  if (const auto f = final_chunks_.find(id); f != final_chunks_.end()) {
-    for (const auto& [chunk, poses] : f->second) path.insert(path.end(), poses.begin(), poses.end());
-  } else {
-    for (const auto& [step, est] : estimates_.at(id)) path.push_back({step, est.time_s, est.pose});
-  }
-  std::ofstream tum;
-  OpenOrThrow(tum, std::filesystem::path(out_dir) / "trajectories" / (id + "_final.tum"));
-  double sum = 0.0;
-  std::size_t n = 0;
-  for (const auto& p : path) {
-    const auto t = truth_.find(p.step);
-    const auto* rt = t == truth_.end() ? nullptr : FindEntity(t->second.robots, id);
-    if (rt == nullptr) continue;
-    sum += (p.pose.Translation() - TruthInOwnFrame(rt->pose, frame).Translation()).squaredNorm();
-    ++n;
-    tum << TumLine(p.time_s, p.pose);
-  }
-  return n == 0 ? 0.0 : std::sqrt(sum / static_cast<double>(n));
-}
-
 std::string RunEvaluator::Missing() const {
   const auto last = static_cast<std::uint32_t>(scenario_.run.steps);
-  if (truth_.size() < last + 1) return fmt::format("truth: {} of {} steps", truth_.size(), last + 1);
-  for (const auto& [id, est] : estimates_) {
-    if (est.count(last) == 0) return fmt::format("{}: estimates of {} of {} steps", id, est.size(), last);
-    const auto o = odometry_.find(id);
-    const std::size_t n = o == odometry_.end() ? 0 : o->second.size();
-    if (n < last) return fmt::format("{}: odometry of {} of {} steps", id, n, last);
-    const std::uint32_t chunks = est.at(last).final_trajectory_chunks;
-    const auto f = final_chunks_.find(id);
-    const std::size_t got = f == final_chunks_.end() ? 0 : f->second.size();
-    if (got < chunks) return fmt::format("{}: final trajectory, {} of {} chunks", id, got, chunks);
+  if (truth_steps_ < last + 1) return fmt::format("truth: {} of {} steps", truth_steps_, last + 1);
+  for (const auto& [id, robot] : robots_) {
+    if (!robot.last_step_in) return fmt::format("{}: estimates of {} of {} steps", id, robot.estimates, last);
+    if (robot.odometry_steps < last) {
+      return fmt::format("{}: odometry of {} of {} steps", id, robot.odometry_steps, last);
+    }
+    if (robot.final_chunks.size() < robot.final_chunks_announced) {
+      return fmt::format("{}: final trajectory, {} of {} chunks", id, robot.final_chunks.size(),
+                         robot.final_chunks_announced);
+    }
   }
   return {};
 }
 
-nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_seconds) const {
-  namespace fs = std::filesystem;
-  const fs::path out(out_dir);
-  fs::create_directories(out / "trajectories");
-  if (truth_.empty()) throw std::runtime_error("no ground truth received");
-  const auto& truth0 = truth_.begin()->second;
-  Outputs files;
-  files.frame_g1 = FrameOf(truth0, scenario_.robots.front().id);
-  OpenOrThrow(files.metrics, out / "metrics.csv");
-  OpenOrThrow(files.tracks, out / "tracks.csv");
-  files.metrics << "step,time_s,robot,x_err_m,y_err_m,position_err_m,heading_err_deg,sigma_x_m,sigma_y_m,"
-                   "sigma_heading_deg,nees,landmark_rmse_m,landmarks_mapped,map_completeness,ess\n";
-  files.tracks << "step,robot,kind,id,x_m,y_m\n";
-  // True landmarks in G1, once per step.
-  for (const auto& [step, truth] : truth_) {
-    for (const auto& l : truth.landmarks) {
-      const auto p = TransformPoint(common::Inverse(files.frame_g1), l.pose.Translation());
-      files.tracks << fmt::format("{},world,truth_landmark,{},{:.4f},{:.4f}\n", step, l.id, p.x(), p.y());
-    }
-  }
+std::size_t RunEvaluator::Pending() const {
+  std::size_t n = truth_.size() + timing_.Held();
+  for (const auto& [id, robot] : robots_) n += robot.pending.size() + robot.odometry.size();
+  return n;
+}
 
+void RunEvaluator::Advance(bool finishing) {
+  if (!started_) return;
+  WriteViewSteps(finishing);
+  for (auto& [id, robot] : robots_) ScoreSteps(id, &robot, finishing);
+  // The truth of a step is needed until it is shown and every robot has scored that step or
+  // passed it.
+  while (!truth_.empty()) {
+    const std::uint32_t step = truth_.begin()->first;
+    bool needed = step >= next_view_step_;
+    for (const auto& [id, robot] : robots_) {
+      needed = needed || robot.estimates == 0 || robot.newest_estimate < step || robot.pending.count(step) > 0;
+    }
+    if (needed && !finishing) break;
+    truth_.erase(truth_.begin());
+  }
+}
+
+void RunEvaluator::WriteViewSteps(bool finishing) {
+  std::set<std::uint32_t> steps;  // finishing: every step still held
+  for (const auto& [step, truth] : truth_) steps.insert(step);
+  for (const auto& [id, robot] : robots_) {
+    for (const auto& [step, e] : robot.pending) steps.insert(step);
+  }
+  for (const std::uint32_t step : steps) {
+    if (step < next_view_step_) continue;
+    // Live, a step is shown once its truth is in (or a later one) and every robot's estimate
+    // of it (or a later one): what is missing then will not come.
+    const bool truth_settled = truth_.count(step) > 0 || (truth_steps_ > 0 && newest_truth_ > step);
+    bool estimates_settled = true;
+    for (const auto& [id, robot] : robots_) {
+      estimates_settled =
+          estimates_settled && (robot.pending.count(step) > 0 || (robot.estimates > 0 && robot.newest_estimate > step));
+    }
+    if (!finishing && !(truth_settled && estimates_settled)) break;
+    ViewStepInput input;
+    input.step = step;
+    if (const auto t = truth_.find(step); t != truth_.end()) {
+      input.truth = &t->second;
+      input.time_s = t->second.stamp.time_s;
+    }
+    for (const auto& [id, robot] : robots_) {
+      if (const auto e = robot.pending.find(step); e != robot.pending.end()) {
+        input.estimates[id] = &e->second;
+        input.time_s = e->second.time_s;
+      }
+    }
+    view_ << ViewStep(input).dump() << "\n";
+    next_view_step_ = step + 1;
+  }
+}
+
+void RunEvaluator::ScoreSteps(const std::string& id, RobotRun* robot, bool finishing) {
+  while (!robot->pending.empty()) {
+    const auto it = robot->pending.begin();
+    const std::uint32_t step = it->first;
+    if (step >= next_view_step_ && !finishing) break;
+    const common::Odometry* odo = nullptr;
+    if (const auto o = robot->odometry.find(step); o != robot->odometry.end()) {
+      odo = &o->second;
+    } else if (step > 0 && !finishing && robot->newest_odometry <= step) {
+      break;  // the step's odometry is still to come
+    }
+    ScoreStep(id, robot, it->second, odo);
+    robot->odometry.erase(robot->odometry.begin(), robot->odometry.upper_bound(step));
+    robot->pending.erase(it);
+    robot->next_step = step + 1;
+  }
+}
+
+void RunEvaluator::ScoreStep(const std::string& id, RobotRun* robot, const RobotEstimate& est,
+                             const common::Odometry* odo) {
+  robot->step_cpu_ms.push_back(est.step_cpu_ms);
+  const auto t_it = truth_.find(est.step);
+  if (t_it == truth_.end()) return;
+  const auto* rt = FindEntity(t_it->second.robots, id);
+  if (rt == nullptr) return;
+  const StepScore score = robot->scorer->Add(t_it->second, rt->pose, est.pose, est.covariance, est.landmarks, odo);
+  WriteStep(id, est, score, robot);
+  robot->online_sum_sq += (est.pose.Translation() - score.truth_own.Translation()).squaredNorm();
+  ++robot->online_count;
+  robot->tum_final << TumLine(est.time_s, est.pose);
+  robot->last = est;
+}
+
+nlohmann::json RunEvaluator::Finish(double wall_seconds) {
+  if (!started_) throw std::runtime_error("no ground truth received");
+  Advance(true);
   nlohmann::json summary;
   summary["scenario"] = scenario_.name;
   summary["seed"] = scenario_.seed;
   summary["steps"] = scenario_.run.steps;
   summary["wall_seconds"] = wall_seconds;
   summary["robots"] = nlohmann::json::object();
-  const auto reached = ReachedLandmarks();
-  for (const auto& robot : scenario_.robots) {
-    OpenOrThrow(files.tum_estimate, out / "trajectories" / (robot.id + "_estimate.tum"));
-    OpenOrThrow(files.tum_truth, out / "trajectories" / (robot.id + "_truth.tum"));
-    summary["robots"][robot.id] = ScoreRobot(robot.id, reached, &files);
-    summary["robots"][robot.id]["final_trajectory_rmse_m"] =
-        ScoreFinalTrajectory(robot.id, FrameOf(truth_.begin()->second, robot.id), out_dir);
-    files.tum_estimate.close();
-    files.tum_truth.close();
+  for (const auto& r : scenario_.robots) {
+    RobotRun& robot = robots_.at(r.id);
+    summary["robots"][r.id] = RobotSummaryJson(r.id, robot);
+    summary["robots"][r.id]["final_trajectory_rmse_m"] = ScoreFinalTrajectory(r.id, &robot);
+    robot.tum_estimate.close();
+    robot.tum_truth.close();
   }
-  std::ofstream view;
-  OpenOrThrow(view, out / "view.jsonl");
-  WriteViewLines(view, ViewHeader(scenario_), truth_, estimates_);
+  metrics_.close();
+  tracks_.close();
+  view_.close();
+  if (!metrics_ || !tracks_ || !view_) throw std::runtime_error("cannot write the run's files in '" + out_dir_ + "'");
   std::ofstream js;
-  OpenOrThrow(js, out / "summary.json");
+  OpenOrThrow(js, std::filesystem::path(out_dir_) / "summary.json");
   js << summary.dump(2) << "\n";
   return summary;
 }
 
-std::map<std::string, std::set<int>> RunEvaluator::ReachedLandmarks() const {
-  std::map<std::string, std::set<int>> reached;
-  for (const auto& [step, truth] : truth_) {
-    for (const auto& rt : truth.robots) {
-      for (const auto& l : truth.landmarks) {
-        if (InLidarReach(scenario_.sensors.lidar, rt.pose, l.pose.Translation()))
-          reached[rt.id].insert(std::stoi(l.id));
-      }
+double RunEvaluator::ScoreFinalTrajectory(const std::string& id, RobotRun* robot) {
+  if (robot->final_chunks.empty()) {  // the online path, written as it went
+    robot->tum_final.close();
+    return robot->online_count == 0 ? 0.0 : std::sqrt(robot->online_sum_sq / static_cast<double>(robot->online_count));
+  }
+  robot->tum_final.close();
+  OpenOrThrow(robot->tum_final, std::filesystem::path(out_dir_) / "trajectories" / (id + "_final.tum"));
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (const auto& [chunk, poses] : robot->final_chunks) {
+    for (const auto& p : poses) {
+      const auto truth = robot->truth_own.find(p.step);
+      if (truth == robot->truth_own.end()) continue;
+      sum += (p.pose.Translation() - truth->second.Translation()).squaredNorm();
+      ++n;
+      robot->tum_final << TumLine(p.time_s, p.pose);
     }
   }
-  return reached;
+  robot->tum_final.close();
+  return n == 0 ? 0.0 : std::sqrt(sum / static_cast<double>(n));
 }
 
-nlohmann::json RunEvaluator::ScoreRobot(const std::string& id, const std::map<std::string, std::set<int>>& reached,
-                                        Outputs* files) const {
-  const auto& truth0 = truth_.begin()->second;
-  const Pose2 frame = FrameOf(truth0, id);
-  // Dead reckoning from the true initial pose in the robot's own frame.
-  const auto* r0 = FindEntity(truth0.robots, id);
-  RobotScorer scorer(frame, r0 != nullptr ? TruthInOwnFrame(r0->pose, frame) : Pose2{}, scenario_.sensors.lidar);
-  const auto odometry = odometry_.find(id);
-  const RobotEstimate* last = nullptr;
-  std::vector<double> step_cpu_ms;
-  for (const auto& [step, est] : estimates_.at(id)) {
-    step_cpu_ms.push_back(est.step_cpu_ms);
-    const auto t_it = truth_.find(step);
-    if (t_it == truth_.end()) continue;
-    const auto* rt = FindEntity(t_it->second.robots, id);
-    if (rt == nullptr) continue;
-    const common::Odometry* odo = nullptr;
-    if (odometry != odometry_.end()) {
-      const auto o = odometry->second.find(step);
-      if (o != odometry->second.end()) odo = &o->second;
-    }
-    const StepScore score = scorer.Add(t_it->second, rt->pose, est.pose, est.covariance, est.landmarks, odo);
-    WriteStep(id, common::Compose(common::Inverse(files->frame_g1), frame), est, score, files);
-    last = &est;
-  }
-  const RobotSummary s = scorer.Summary();
+nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const RobotRun& robot) const {
+  const RobotSummary s = robot.scorer->Summary();
   nlohmann::json r;
   r["position_rmse_m"] = s.position_rmse_m;
   r["heading_rmse_deg"] = s.heading_rmse_deg;
@@ -205,59 +308,57 @@ nlohmann::json RunEvaluator::ScoreRobot(const std::string& id, const std::map<st
   r["moving_completeness"] = s.moving_completeness;
   // Of the landmarks within the reach of this robot or of any robot whose frame it knows (over
   // the whole run), the share in its map at the end.
-  std::set<int> union_reach;
-  if (const auto it = reached.find(id); it != reached.end()) union_reach = it->second;
-  if (last != nullptr) {
-    for (const auto& peer : last->frames_known) {
-      if (const auto it = reached.find(peer); it != reached.end())
-        union_reach.insert(it->second.begin(), it->second.end());
+  std::set<int> union_reach = robot.reached;
+  if (robot.last) {
+    for (const auto& peer : robot.last->frames_known) {
+      if (const auto it = robots_.find(peer); it != robots_.end())
+        union_reach.insert(it->second.reached.begin(), it->second.reached.end());
     }
   }
   std::size_t union_mapped = 0;
-  for (const int l : union_reach) union_mapped += scorer.InMap().count(l);
+  for (const int l : union_reach) union_mapped += robot.scorer->InMap().count(l);
   r["union_completeness"] =
       union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
   r["steps_scored"] = s.steps_scored;
-  r["step_cpu_ms_median"] = step_cpu_ms.empty() ? 0.0 : Median(step_cpu_ms);
-  r["step_cpu_ms_p99"] = step_cpu_ms.empty() ? 0.0 : Percentile(step_cpu_ms, 99.0);
+  r["step_cpu_ms_median"] = robot.step_cpu_ms.empty() ? 0.0 : Median(robot.step_cpu_ms);
+  r["step_cpu_ms_p99"] = robot.step_cpu_ms.empty() ? 0.0 : Percentile(robot.step_cpu_ms, 99.0);
   const DeliverySummary delivery = timing_.Summary(id);
   r["latency_us_median"] = delivery.latency_us_median;
   r["latency_us_p99"] = delivery.latency_us_p99;
   r["late_estimates"] = delivery.late_estimates;
-  r["frames_known"] = last != nullptr ? last->frames_known : std::vector<std::string>{};
-  r["rejected_samples"] = last != nullptr ? last->rejected_samples : 0U;
-  r["rendezvous"] = last != nullptr ? ScoreRendezvous(frame, *last) : nlohmann::json::array();
+  r["frames_known"] = robot.last ? robot.last->frames_known : std::vector<std::string>{};
+  r["rejected_samples"] = robot.last ? robot.last->rejected_samples : 0U;
+  r["rendezvous"] = robot.last ? ScoreRendezvous(robot.frame, *robot.last) : nlohmann::json::array();
   return r;
 }
 
-void RunEvaluator::WriteStep(const std::string& id, const Pose2& g1_from_gi, const RobotEstimate& est,
-                             const StepScore& score, Outputs* files) {
+void RunEvaluator::WriteStep(const std::string& id, const RobotEstimate& est, const StepScore& score, RobotRun* robot) {
+  const Pose2 g1_from_gi = common::Compose(common::Inverse(frame_g1_), robot->frame);
   const Pose2& truth_own = score.truth_own;
   const Eigen::Vector3d sigma = est.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  files->metrics << fmt::format(
+  metrics_ << fmt::format(
       "{},{:.3f},{},{:.5f},{:.5f},{:.5f},{:.4f},{:.5f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.2f}\n", est.step,
       est.time_s, id, est.pose.x - truth_own.x, est.pose.y - truth_own.y, score.position_err_m,
       common::DegFromRad(common::WrapAngle(est.pose.heading - truth_own.heading)), sigma.x(), sigma.y(),
       common::DegFromRad(sigma.z()), score.nees, Rmse(score.landmark_errors_m), est.landmarks.size(),
       score.map_completeness, est.effective_sample_size);
-  files->tum_estimate << TumLine(est.time_s, est.pose);
-  files->tum_truth << TumLine(est.time_s, truth_own);
+  robot->tum_estimate << TumLine(est.time_s, est.pose);
+  robot->tum_truth << TumLine(est.time_s, truth_own);
   const Pose2 est_g1 = common::Compose(g1_from_gi, est.pose);
   const Pose2 truth_g1 = common::Compose(g1_from_gi, truth_own);
-  files->tracks << fmt::format("{},{},estimate_robot,{},{:.4f},{:.4f}\n", est.step, id, id, est_g1.x, est_g1.y);
-  files->tracks << fmt::format("{},{},truth_robot,{},{:.4f},{:.4f}\n", est.step, id, id, truth_g1.x, truth_g1.y);
+  tracks_ << fmt::format("{},{},estimate_robot,{},{:.4f},{:.4f}\n", est.step, id, id, est_g1.x, est_g1.y);
+  tracks_ << fmt::format("{},{},truth_robot,{},{:.4f},{:.4f}\n", est.step, id, id, truth_g1.x, truth_g1.y);
   for (std::size_t k = 0; k < est.landmarks.size(); ++k) {
     const auto p = TransformPoint(g1_from_gi, est.landmarks[k].position_m);
-    files->tracks << fmt::format("{},{},estimate_landmark,{},{:.4f},{:.4f}\n", est.step, id,
-                                 est.landmarks[k].landmark_id >= 0 ? est.landmarks[k].landmark_id : static_cast<int>(k),
-                                 p.x(), p.y());
+    tracks_ << fmt::format("{},{},estimate_landmark,{},{:.4f},{:.4f}\n", est.step, id,
+                           est.landmarks[k].landmark_id >= 0 ? est.landmarks[k].landmark_id : static_cast<int>(k),
+                           p.x(), p.y());
   }
 }
 
 nlohmann::json RunEvaluator::ScoreRendezvous(const Pose2& frame, const RobotEstimate& last) const {
   // A rendezvous is scored by the transform the robot holds at the end of the encounter:
   // the last report of that peer within 10 steps of the first.
-  const auto& truth0 = truth_.begin()->second;
   nlohmann::json rendezvous = nlohmann::json::array();
   std::map<std::string, std::vector<const RendezvousRecord*>> by_peer;
   for (const auto& rec : last.rendezvous) by_peer[rec.peer].push_back(&rec);
@@ -268,7 +369,7 @@ nlohmann::json RunEvaluator::ScoreRendezvous(const Pose2& frame, const RobotEsti
     for (const auto* rec : records) {
       if (rec->step <= first_step + 10) held = rec;
     }
-    const auto err = FrameTransformError(held->t_self_peer, frame, FrameOf(truth0, peer));
+    const auto err = FrameTransformError(held->t_self_peer, frame, robots_.at(peer).frame);
     rendezvous.push_back({{"peer", peer},
                           {"step", first_step},
                           {"transform_error_m", err.translation_m},

@@ -1,8 +1,10 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -26,18 +28,24 @@ struct FinalPose {
   common::Pose2 pose;
 };
 
-// Scores a run: collects the truth and every robot's estimates and odometry by step, then
-// computes the per-step metrics (errors in each robot's own frame, through the true frame
-// pose) and the run summary of docs/metrics.md, and writes metrics.csv, summary.json, TUM
+// Scores a run as it goes: the per-step metrics (errors in each robot's own frame, through the
+// true frame pose) and the run summary of docs/metrics.md; writes metrics.csv, TUM
 // trajectories, tracks.csv (everything in the first robot's frame, for plots) and view.jsonl
-// (the run step by step for mrslam_view --run). Pure: no DDS.
+// (the run step by step for mrslam_view --run) step by step, and summary.json at the end. A
+// robot's step is scored once its truth and odometry are in (or later ones show they will not
+// come), a view step once every robot's estimate of it is in (or a later one); then they are let
+// go, so that the memory held does not grow with the run: per step only each robot's true pose in
+// its frame (for its final trajectory) and a few numbers. Pure: no DDS.
 class RunEvaluator {
  public:
-  explicit RunEvaluator(const common::ScenarioOptions& scenario);
+  // Creates out_dir and its files at once.
+  RunEvaluator(const common::ScenarioOptions& scenario, const std::string& out_dir);
 
   // written_ns: when world_sim wrote the message (DDS's source timestamp, ns since the Unix
   // epoch; 0 unknown), for the delivery figures (DeliveryTiming).
   void AddTruth(const common::GroundTruth& truth, std::int64_t written_ns = 0);
+  // A second estimate of a step already scored (an agent that came back and published it again)
+  // is left out.
   void AddEstimate(const std::string& robot_id, const RobotEstimate& estimate);
   void AddOdometry(const std::string& robot_id, const common::Odometry& odometry, std::int64_t written_ns = 0);
   // A chunk (0..chunks-1) of a robot's final trajectory.
@@ -48,34 +56,67 @@ class RunEvaluator {
   bool Complete() const;
   // What is still missing (for a timeout message).
   std::string Missing() const;
+  // How many messages were taken in so far (it grows only with something new).
+  std::size_t Received() const { return received_; }
+  // Steps, estimates and times held, not yet scored, shown or timed (a run gone out of step
+  // holds more).
+  std::size_t Pending() const;
 
-  // Computes everything and writes the files into out_dir. Returns the summary.
-  nlohmann::json Write(const std::string& out_dir, double wall_seconds) const;
+  // Scores what is still held (steps whose data did not all come), the final trajectories, and
+  // writes summary.json. Returns the summary.
+  nlohmann::json Finish(double wall_seconds);
 
  private:
-  // The files Write fills, and the first robot's frame G1 (tracks are in G1).
-  struct Outputs {
-    std::ofstream metrics, tracks, tum_estimate, tum_truth;
-    common::Pose2 frame_g1;
+  // One robot's part of the run.
+  struct RobotRun {
+    common::Pose2 frame;  // G_i in W
+    std::optional<RobotScorer> scorer;
+    std::map<std::uint32_t, RobotEstimate> pending;      // received, not yet scored
+    std::map<std::uint32_t, common::Odometry> odometry;  // received, not yet used
+    std::uint32_t next_step = 0;                         // every step before it is scored
+    std::uint32_t newest_estimate = 0;                   // the newest step received
+    std::uint32_t newest_odometry = 0;
+    std::size_t estimates = 0, odometry_steps = 0;  // received
+    bool last_step_in = false;
+    std::uint32_t final_chunks_announced = 0;
+    std::optional<RobotEstimate> last;  // the newest scored
+    std::vector<double> step_cpu_ms;
+    std::set<int> reached;                             // true landmarks ever within its reach
+    std::map<std::uint32_t, common::Pose2> truth_own;  // its true pose in G_i by step
+    double online_sum_sq = 0.0;                        // its online path as a final trajectory
+    std::size_t online_count = 0;
+    std::map<std::uint32_t, std::vector<FinalPose>> final_chunks;
+    std::ofstream tum_estimate, tum_truth, tum_final;
   };
-  // Per robot, the true landmarks ever within its reach (for the union completeness).
-  std::map<std::string, std::set<int>> ReachedLandmarks() const;
-  // Scores robot id step by step (writing its rows, trajectories and tracks); its summary entry.
-  nlohmann::json ScoreRobot(const std::string& id, const std::map<std::string, std::set<int>>& reached,
-                            Outputs* files) const;
-  static void WriteStep(const std::string& id, const common::Pose2& g1_from_gi, const RobotEstimate& estimate,
-                        const StepScore& score, Outputs* files);
+
+  void Start(const common::GroundTruth& truth0);
+  // Shows and scores whatever is complete (finishing: everything held), then lets go of the
+  // truth no one needs any more.
+  void Advance(bool finishing);
+  void WriteViewSteps(bool finishing);
+  void ScoreSteps(const std::string& id, RobotRun* robot, bool finishing);
+  void ScoreStep(const std::string& id, RobotRun* robot, const RobotEstimate& est, const common::Odometry* odo);
+  void WriteStep(const std::string& id, const RobotEstimate& estimate, const StepScore& score, RobotRun* robot);
+  // The robot's summary entry; the union completeness over the robots whose frame it knows.
+  nlohmann::json RobotSummaryJson(const std::string& id, const RobotRun& robot) const;
   // The robot's final trajectory (the agent's, else its online path), scored against the truth
   // and written as trajectories/<id>_final.tum; returns its position RMSE.
-  double ScoreFinalTrajectory(const std::string& id, const common::Pose2& frame, const std::string& out_dir) const;
+  double ScoreFinalTrajectory(const std::string& id, RobotRun* robot);
   // The robot's rendezvous, each by the transform held at the end of the encounter.
   nlohmann::json ScoreRendezvous(const common::Pose2& frame, const RobotEstimate& last) const;
 
   common::ScenarioOptions scenario_;
-  std::map<std::uint32_t, common::GroundTruth> truth_;
-  std::map<std::string, std::map<std::uint32_t, RobotEstimate>> estimates_;
-  std::map<std::string, std::map<std::uint32_t, common::Odometry>> odometry_;
-  std::map<std::string, std::map<std::uint32_t, std::vector<FinalPose>>> final_chunks_;
+  std::string out_dir_;
+  std::ofstream metrics_, tracks_, view_;
+  bool started_ = false;
+  common::Pose2 frame_g1_;  // tracks are in G1
+  std::map<std::string, common::Pose2> frames_;
+  std::map<std::string, RobotRun> robots_;
+  std::map<std::uint32_t, common::GroundTruth> truth_;  // received, still needed
+  std::size_t truth_steps_ = 0;                         // received
+  std::uint32_t newest_truth_ = 0;
+  std::uint32_t next_view_step_ = 0;  // every step before it is shown
+  std::size_t received_ = 0;
   DeliveryTiming timing_;
 };
 

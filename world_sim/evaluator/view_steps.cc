@@ -2,7 +2,6 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <set>
 
 namespace mrslam::evaluator {
 
@@ -84,31 +83,6 @@ json ViewStep(const ViewStepInput& input) {
     }
   }
   return step;
-}
-
-void WriteViewLines(std::ostream& out, const json& header, const std::map<std::uint32_t, common::GroundTruth>& truth,
-                    const std::map<std::string, std::map<std::uint32_t, RobotEstimate>>& estimates) {
-  std::set<std::uint32_t> steps;
-  for (const auto& [step, t] : truth) steps.insert(step);
-  for (const auto& [id, by_step] : estimates) {
-    for (const auto& [step, e] : by_step) steps.insert(step);
-  }
-  out << header.dump() << "\n";
-  for (const std::uint32_t step : steps) {
-    ViewStepInput input;
-    input.step = step;
-    if (const auto t = truth.find(step); t != truth.end()) {
-      input.truth = &t->second;
-      input.time_s = t->second.stamp.time_s;
-    }
-    for (const auto& [id, by_step] : estimates) {
-      if (const auto e = by_step.find(step); e != by_step.end()) {
-        input.estimates[id] = &e->second;
-        input.time_s = e->second.time_s;
-      }
-    }
-    out << ViewStep(input).dump() << "\n";
-  }
 }
 
 }  // namespace mrslam::evaluator

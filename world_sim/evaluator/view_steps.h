@@ -2,7 +2,6 @@
 
 #include <cstdint>
 #include <map>
-#include <ostream>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -36,10 +35,5 @@ struct ViewStepInput {
 // cxx, cxy, cyy, moving, heading, v, id]], "frames_known", "rendezvous": [[peer, step]],
 // "rejected"}}, "lidar": {id: [[range, bearing]]}}. Numbers keep 6 significant digits.
 nlohmann::json ViewStep(const ViewStepInput& input);
-
-// Writes the header and then one step per line (JSON Lines).
-void WriteViewLines(std::ostream& out, const nlohmann::json& header,
-                    const std::map<std::uint32_t, common::GroundTruth>& truth,
-                    const std::map<std::string, std::map<std::uint32_t, RobotEstimate>>& estimates);
 
 }  // namespace mrslam::evaluator
