@@ -125,5 +125,29 @@ TEST_F(RunEvaluatorTest, AnAnnouncedFinalTrajectoryIsAwaitedAndScored) {
   EXPECT_TRUE(std::filesystem::exists(out_dir_ + "/trajectories/r1_final.tum"));
 }
 
+// Held() counts what is new only: a sample sent again (a replayed history) does not make it grow,
+// so the evaluator's bound on a run that is gone is not reset by replays.
+TEST_F(RunEvaluatorTest, HeldGrowsWithNewStepsOnlyNotWithReplays) {
+  RunEvaluator evaluator(scenario_);
+  EXPECT_EQ(evaluator.Held(), 0U);
+  common::GroundTruth truth;
+  truth.stamp.step = 0;
+  evaluator.AddTruth(truth);
+  RobotEstimate r1;
+  r1.step = 1;
+  evaluator.AddEstimate("r1", r1);
+  EXPECT_EQ(evaluator.Held(), 2U);
+  evaluator.AddTruth(truth);
+  evaluator.AddEstimate("r1", r1);
+  EXPECT_EQ(evaluator.Held(), 2U);
+  truth.stamp.step = 1;
+  evaluator.AddTruth(truth);
+  common::Odometry odometry;
+  odometry.stamp.step = 1;
+  evaluator.AddOdometry("r2", odometry);
+  evaluator.AddFinalTrajectory("r1", 0, {});
+  EXPECT_EQ(evaluator.Held(), 5U);
+}
+
 }  // namespace
 }  // namespace mrslam::evaluator

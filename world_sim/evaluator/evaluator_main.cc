@@ -61,7 +61,10 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
   }
   RunEvaluator evaluator(scenario);
   std::uint64_t seen = 0;
-  auto last_data = Clock::now();
+  // The run is gone when nothing new (a step not held yet) arrives for this long: samples that
+  // are sent again (a writer's history replayed to the evaluator) do not count.
+  auto last_new = Clock::now();
+  std::size_t held = 0;
   const auto timeout = std::chrono::duration<double>(scenario.run.ack_timeout_s * 2.0);
   spdlog::info("evaluating '{}' seed {} on domain {}", scenario.name, scenario.seed, dds_options.domain);
   while (!evaluator.Complete()) {
@@ -69,12 +72,8 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
       spdlog::warn("stopped before the run was complete ({})", evaluator.Missing());
       return 130;
     }
-    bool got = false;
     msg::GroundTruth t;
-    while (truth_reader.TryTake(&t)) {
-      evaluator.AddTruth(dds::FromMsg(t));
-      got = true;
-    }
+    while (truth_reader.TryTake(&t)) evaluator.AddTruth(dds::FromMsg(t));
     for (auto& [id, reader] : estimate_readers) {
       msg::Estimate e;
       while (reader->TryTake(&e)) {
@@ -83,15 +82,11 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
           continue;
         }
         evaluator.AddEstimate(id, FromEstimateMsg(e));
-        got = true;
       }
     }
     for (auto& [id, reader] : odometry_readers) {
       msg::Odometry o;
-      while (reader->TryTake(&o)) {
-        evaluator.AddOdometry(id, dds::FromMsg(o));
-        got = true;
-      }
+      while (reader->TryTake(&o)) evaluator.AddOdometry(id, dds::FromMsg(o));
     }
     for (auto& [id, reader] : final_readers) {
       msg::FinalTrajectory f;
@@ -103,13 +98,16 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
           continue;
         }
         evaluator.AddFinalTrajectory(id, f.chunk(), FromFinalMsg(f));
-        got = true;
       }
     }
-    if (got) last_data = Clock::now();
-    if (Clock::now() - last_data > timeout) {
-      throw std::runtime_error("no data for " + fmt::format("{:g}", timeout.count()) + " s; missing " +
-                               evaluator.Missing());
+    if (evaluator.Held() != held) {
+      held = evaluator.Held();
+      last_new = Clock::now();
+    }
+    if (Clock::now() - last_new > timeout) {
+      throw std::runtime_error(fmt::format(
+          "the run is gone: nothing new from world_sim or the agents for {:g} s (twice run.ack_timeout_s); missing {}",
+          timeout.count(), evaluator.Missing()));
     }
     notifier.Wait(&seen, std::chrono::milliseconds(100));
   }

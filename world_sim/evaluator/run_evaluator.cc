@@ -102,6 +102,14 @@ std::string RunEvaluator::Missing() const {
   return {};
 }
 
+std::size_t RunEvaluator::Held() const {
+  std::size_t n = truth_.size();
+  for (const auto& [id, steps] : estimates_) n += steps.size();
+  for (const auto& [id, steps] : odometry_) n += steps.size();
+  for (const auto& [id, chunks] : final_chunks_) n += chunks.size();
+  return n;
+}
+
 nlohmann::json RunEvaluator::Write(const std::string& out_dir, double wall_seconds) const {
   namespace fs = std::filesystem;
   const fs::path out(out_dir);

@@ -45,6 +45,9 @@ class RunEvaluator {
   bool Complete() const;
   // What is still missing (for a timeout message).
   std::string Missing() const;
+  // How many distinct items are held (truth and odometry steps, estimates, final trajectory
+  // chunks): it grows only with something new.
+  std::size_t Held() const;
 
   // Computes everything and writes the files into out_dir. Returns the summary.
   nlohmann::json Write(const std::string& out_dir, double wall_seconds) const;
