@@ -10,7 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-matplotlib
   iproute2 procps clang-format clang-tidy clang libclang-rt-14-dev
-  libcpp-httplib-dev chromium chromium-driver cyclonedds-dev cyclonedds-tools
+  libcpp-httplib-dev chromium chromium-driver cyclonedds-dev cyclonedds-tools stress-ng
 )
 
 missing=()

@@ -308,6 +308,25 @@ struct AgentNode::Impl {
     return static_cast<std::uint32_t>(chunks.size());
   }
 
+  // At the end of the run: lets the evaluator and the simulator receive the final estimate and
+  // ack, and the peers every peer message (a peer still waits for those of the last steps; a
+  // writer deleted before a lost sample is resent would leave it waiting for ever). At most 10 s
+  // in all.
+  void Flush() {
+    const auto deadline = Clock::now() + milliseconds(10000);
+    const auto left = [&] {
+      return std::max(milliseconds(0), std::chrono::duration_cast<milliseconds>(deadline - Clock::now()));
+    };
+    estimate_writer.WaitForAcknowledgments(left());
+    final_writer.WaitForAcknowledgments(left());
+    ack_writer.WaitForAcknowledgments(left());
+    for (auto& [peer, w] : peers) {
+      w->relative.WaitForAcknowledgments(left());
+      w->map.WaitForAcknowledgments(left());
+      w->moved.WaitForAcknowledgments(left());
+    }
+  }
+
   // Processes the next step if all of it is here. Returns true if it did.
   bool TryProcess(bool* last) {
     const std::uint32_t k = next_step;
@@ -397,10 +416,7 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
     while (a.TryProcess(&last)) {
       progressed = true;
       if (last) {
-        // Let the evaluator and the simulator receive the final estimate and ack.
-        a.estimate_writer.WaitForAcknowledgments(milliseconds(5000));
-        a.final_writer.WaitForAcknowledgments(milliseconds(5000));
-        a.ack_writer.WaitForAcknowledgments(milliseconds(5000));
+        a.Flush();
         spdlog::info("agent {} done: {} steps, rejected: {}", a.agent.robot_id, a.counters.steps_processed,
                      a.counters.rejected.Describe());
         if (a.counters.rejected.Failing() > 0 && !a.options.allow_rejected) {

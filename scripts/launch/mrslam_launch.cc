@@ -32,6 +32,7 @@
 #include "scripts/launch/progress_monitor.h"
 #include "scripts/launch/run_report.h"
 #include "scripts/launch/run_viewer.h"
+#include "scripts/launch/shm_leftovers.h"
 #include "scripts/launch/simulation_run.h"
 
 namespace mrslam::launch {
@@ -196,6 +197,14 @@ void ReportEnd(const RunEnd& end, const RunLimits& limits, ProcessSupervisor* ch
             << "/logs\n";
 }
 
+// Once a run's processes are gone: removes what a killed one left in /dev/shm (a clean exit
+// leaves nothing there) and says so.
+void RemoveShmFiles(int domain) {
+  if (const int n = RemoveShmLeftovers(domain); n > 0) {
+    std::cerr << kName << ": removed " << n << " file(s) a killed process left in /dev/shm\n";
+  }
+}
+
 // Starts the evaluator and waits until it is in the domain (the monitor sees it), before the others:
 // it is not part of the lockstep barrier, so a short run could otherwise end (and its writers go
 // away) before it joins. Returns false, reported, if the evaluator ended first.
@@ -314,8 +323,9 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   printer.Finish();
   const bool monitor_joined = monitor != nullptr;
   monitor.reset();
+  if (end.kind != RunEnd::Kind::kDone) ReportEnd(end, limits, &children, dir);
+  if (run.shared_memory) RemoveShmFiles(domain);
   if (end.kind != RunEnd::Kind::kDone) {
-    ReportEnd(end, limits, &children, dir);
     if (end.kind == RunEnd::Kind::kStopped) return kStopped;
     return monitor_joined && !first_step_at ? kFailedBeforeStep1 : kFailed;
   }

@@ -1,14 +1,21 @@
 // Multi-process: mrslam_launch runs a whole scenario (evaluator, world_sim, one robot_agent per
 // robot) and writes the contracted outputs; a killed agent makes it stop everything and exit
-// non-zero naming the agent; SIGINT stops every child (exit 130); no process is left behind.
+// non-zero naming the agent, and leaves nothing in /dev/shm, with and without --shm; SIGINT
+// stops every child (exit 130); no process is left behind.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -45,6 +52,8 @@ constexpr int kSeedsDomain = 124;
 constexpr int kSeedFailsDomain = 125;
 constexpr int kForeignDomain = 126;
 constexpr int kSmootherDomain = 127;
+constexpr int kShmKillDomain = 128;
+constexpr int kStopDomain = 129;
 
 constexpr int kShortSteps = 12;
 
@@ -106,6 +115,45 @@ void KillAgentAfterStep3(int domain, ChildProcess& launcher, const std::string& 
   ASSERT_NE(victim, 0);
   killed->groups = GroupsOf(killed->children);
   ASSERT_EQ(kill(victim, SIGKILL), 0);
+}
+
+// The files of /dev/shm that no living process holds (its Fast DDS lock file missing or not
+// locked): a segment "fastrtps_<16 characters>" or a port of the domain's range (7400 + 250 d +
+// 0..249) with their lock and mutex files.
+std::set<std::string> UnheldShmFiles(int domain) {
+  const auto held = [](const std::string& lock) {
+    const int fd = open(("/dev/shm/" + lock).c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return false;
+    const bool locked = flock(fd, LOCK_EX | LOCK_NB) != 0;
+    close(fd);
+    return locked;
+  };
+  const std::regex segment("fastrtps_[0-9a-z]{16}(_el)?");
+  const std::regex port("(sem\\.)?fastrtps_port([0-9]+)(_el|_sl|_mutex)?");
+  std::set<std::string> out;
+  for (const auto& entry : std::filesystem::directory_iterator("/dev/shm")) {
+    const std::string name = entry.path().filename().string();
+    std::smatch m;
+    if (std::regex_match(name, segment) && !held(name.substr(0, 25) + "_el")) out.insert(name);
+    if (std::regex_match(name, m, port)) {
+      const int p = std::stoi(m[2]);
+      if (p >= 7400 + 250 * domain && p < 7650 + 250 * domain && !held("fastrtps_port" + m[2].str() + "_el"))
+        out.insert(name);
+    }
+  }
+  return out;
+}
+
+std::set<std::string> Minus(const std::set<std::string>& a, const std::set<std::string>& b) {
+  std::set<std::string> out;
+  std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::inserter(out, out.end()));
+  return out;
+}
+
+std::string Join(const std::set<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += n + " ";
+  return out;
 }
 
 void ExpectFiniteAtLeast(const nlohmann::json& robot, const std::string& key, double min, const std::string& id) {
@@ -233,6 +281,7 @@ TEST(LauncherTest, KilledAgentStopsTheRunNamingItAndLeavesNoProcess) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-launch-kill");
   const std::string& out = temp_dir.path();
+  const auto before = UnheldShmFiles(kKillDomain);
   // Long enough that the run is still going when the agent is killed right after step 3.
   ChildProcess launcher(LaunchArgs(out, kKillDomain, {"--set", "run.steps=2000", "--no-plots"}), out + ".log");
   KilledAgent killed;
@@ -247,7 +296,60 @@ TEST(LauncherTest, KilledAgentStopsTheRunNamingItAndLeavesNoProcess) {
   EXPECT_THAT(output, HasSubstr("signal 9"));
   EXPECT_THAT(output, HasSubstr(out + "/logs/robot_agent_r2.log"));
   EXPECT_TRUE(NoneLeft(killed.children, killed.groups));
+  // UDP only: nothing in /dev/shm at all.
+  const auto left = Minus(UnheldShmFiles(kKillDomain), before);
+  EXPECT_TRUE(left.empty()) << "left in /dev/shm: " << Join(left);
   std::filesystem::remove(out + ".log");
+}
+
+// With the shared-memory transport a SIGKILLed agent leaves its segment and the ports it held
+// in /dev/shm; once the launcher has exited, none of them is left.
+TEST(LauncherTest, AKilledAgentUnderShmLeavesNothingInDevShm) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-launch-shm-kill");
+  const std::string& out = temp_dir.path();
+  const auto before = UnheldShmFiles(kShmKillDomain);
+  ChildProcess launcher(LaunchArgs(out, kShmKillDomain, {"--set", "run.steps=2000", "--no-plots", "--shm"}),
+                        out + ".log");
+  KilledAgent killed;
+  ASSERT_NO_FATAL_FAILURE(KillAgentAfterStep3(kShmKillDomain, launcher, out + ".log", &killed));
+  const auto code = launcher.WaitExit(seconds(60));
+  ASSERT_TRUE(code.has_value()) << "the launcher did not stop";
+  EXPECT_NE(*code, 0);
+  EXPECT_TRUE(NoneLeft(killed.children, killed.groups));
+  const auto left = Minus(UnheldShmFiles(kShmKillDomain), before);
+  EXPECT_TRUE(left.empty()) << "left in /dev/shm: " << Join(left) << "\n" << ReadFile(out + ".log");
+  EXPECT_THAT(ReadFile(out + ".log"), HasSubstr("a killed process left in /dev/shm"));
+  std::filesystem::remove(out + ".log");
+}
+
+// An agent stopped (SIGSTOP) for 5 s in lockstep, less than run.ack_timeout_s, only delays the
+// run: its numbers are byte for byte those of the same run without the stop.
+TEST(LauncherTest, AnAgentStoppedFor5SecondsChangesNoNumber) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-launch-sigstop");
+  const std::string reference = temp_dir.path() + "/reference";
+  const std::string stopped = temp_dir.path() + "/stopped";
+  const std::vector<std::string> extra = {"--set", "run.steps=150", "--no-plots"};
+  ChildProcess first(LaunchArgs(reference, kStopDomain, extra), reference + ".log");
+  ASSERT_EQ(first.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(reference + ".log");
+
+  ChildProcess launcher(LaunchArgs(stopped, kStopDomain, extra), stopped + ".log");
+  ASSERT_TRUE(WaitForEstimateStep(kStopDomain, "r2", 3, launcher, seconds(120))) << ReadFile(stopped + ".log");
+  const auto children = WaitForChildren(launcher.pid(), 4, seconds(10));
+  const pid_t victim = FindProcess(children, {"robot_agent", "--robot r2"});
+  ASSERT_NE(victim, 0);
+  ASSERT_EQ(kill(victim, SIGSTOP), 0);
+  std::this_thread::sleep_for(seconds(5));
+  ASSERT_EQ(kill(victim, SIGCONT), 0);
+  ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(stopped + ".log");
+  const auto summary = nlohmann::json::parse(ReadFile(stopped + "/summary.json"));
+  EXPECT_GT(summary["wall_seconds"].get<double>(), 5.0) << "the stop did not fall within the run";
+  for (const char* file : {"metrics.csv", "trajectories/r1_estimate.tum", "trajectories/r2_estimate.tum"}) {
+    const std::string expected = ReadFile(reference + "/" + file);
+    EXPECT_FALSE(expected.empty()) << file;
+    EXPECT_TRUE(ReadFile(stopped + "/" + file) == expected) << file << " differs after a 5 s SIGSTOP";
+  }
 }
 
 TEST(LauncherTest, SigintStopsEveryChildAndExits130) {

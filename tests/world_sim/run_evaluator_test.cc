@@ -223,5 +223,25 @@ TEST_F(RunEvaluatorTest, TheOrderInWhichDataArriveDoesNotChangeTheScores) {
   EXPECT_GT(in_order["robots"]["r1"]["dead_reckoning_rmse_m"].get<double>(), 1.0);
 }
 
+// Taken() counts what is new only: a sample sent again (a replayed history) does not make it
+// grow, so the evaluator's bound on a run that is gone is not reset by replays.
+TEST_F(RunEvaluatorTest, TakenGrowsWithNewMessagesOnlyNotWithReplays) {
+  RunEvaluator evaluator(scenario_, out_dir_);
+  EXPECT_EQ(evaluator.Taken(), 0U);
+  const StillStep s0 = StillAt(0);
+  const StillStep s1 = StillAt(1);
+  evaluator.AddTruth(s0.truth);
+  evaluator.AddEstimate("r1", s1.r1);
+  EXPECT_EQ(evaluator.Taken(), 2U);
+  evaluator.AddTruth(s0.truth);
+  evaluator.AddEstimate("r1", s1.r1);
+  EXPECT_EQ(evaluator.Taken(), 2U);
+  evaluator.AddTruth(s1.truth);
+  evaluator.AddOdometry("r2", s1.odometry);
+  evaluator.AddFinalTrajectory("r1", 0, {});
+  evaluator.AddFinalTrajectory("r1", 0, {});
+  EXPECT_EQ(evaluator.Taken(), 5U);
+}
+
 }  // namespace
 }  // namespace mrslam::evaluator

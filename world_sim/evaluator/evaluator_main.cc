@@ -61,7 +61,10 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
   }
   RunEvaluator evaluator(scenario, out_dir);
   std::uint64_t seen = 0;
-  auto last_data = Clock::now();
+  // The run is gone when nothing new (a message not taken in yet) arrives for this long: samples
+  // that are sent again (a writer's history replayed to the evaluator) do not count.
+  auto last_new = Clock::now();
+  std::size_t taken = 0;
   const auto timeout = std::chrono::duration<double>(scenario.run.ack_timeout_s * 2.0);
   spdlog::info("evaluating '{}' seed {} on domain {}", scenario.name, scenario.seed, dds_options.domain);
   while (!evaluator.Complete()) {
@@ -69,13 +72,9 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
       spdlog::warn("stopped before the run was complete ({})", evaluator.Missing());
       return 130;
     }
-    bool got = false;
     msg::GroundTruth t;
     dds::SampleTimes times;
-    while (truth_reader.TryTake(&t, nullptr, &times)) {
-      evaluator.AddTruth(dds::FromMsg(t), times.written_ns);
-      got = true;
-    }
+    while (truth_reader.TryTake(&t, nullptr, &times)) evaluator.AddTruth(dds::FromMsg(t), times.written_ns);
     for (auto& [id, reader] : estimate_readers) {
       msg::Estimate e;
       while (reader->TryTake(&e, nullptr, &times)) {
@@ -87,15 +86,11 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
         estimate.written_ns = times.written_ns;
         estimate.received_ns = times.received_ns;
         evaluator.AddEstimate(id, estimate);
-        got = true;
       }
     }
     for (auto& [id, reader] : odometry_readers) {
       msg::Odometry o;
-      while (reader->TryTake(&o, nullptr, &times)) {
-        evaluator.AddOdometry(id, dds::FromMsg(o), times.written_ns);
-        got = true;
-      }
+      while (reader->TryTake(&o, nullptr, &times)) evaluator.AddOdometry(id, dds::FromMsg(o), times.written_ns);
     }
     for (auto& [id, reader] : final_readers) {
       msg::FinalTrajectory f;
@@ -107,13 +102,16 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
           continue;
         }
         evaluator.AddFinalTrajectory(id, f.chunk(), FromFinalMsg(f));
-        got = true;
       }
     }
-    if (got) last_data = Clock::now();
-    if (Clock::now() - last_data > timeout) {
-      throw std::runtime_error("no data for " + fmt::format("{:g}", timeout.count()) + " s; missing " +
-                               evaluator.Missing());
+    if (evaluator.Taken() != taken) {
+      taken = evaluator.Taken();
+      last_new = Clock::now();
+    }
+    if (Clock::now() - last_new > timeout) {
+      throw std::runtime_error(fmt::format(
+          "the run is gone: nothing new from world_sim or the agents for {:g} s (twice run.ack_timeout_s); missing {}",
+          timeout.count(), evaluator.Missing()));
     }
     notifier.Wait(&seen, std::chrono::milliseconds(100));
   }

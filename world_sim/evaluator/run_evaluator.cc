@@ -83,11 +83,12 @@ void RunEvaluator::Start(const common::GroundTruth& truth0) {
 }
 
 void RunEvaluator::AddTruth(const common::GroundTruth& truth, std::int64_t written_ns) {
-  ++received_;
   const std::uint32_t step = truth.stamp.step;
   if (truth_steps_ > 0 && step <= newest_truth_ && truth_.count(step) == 0) return;  // a step let go
   if (!started_) Start(truth);
-  if (truth_.emplace(step, truth).second) ++truth_steps_;
+  if (!truth_.emplace(step, truth).second) return;  // sent again
+  ++truth_steps_;
+  ++taken_;
   newest_truth_ = std::max(newest_truth_, step);
   timing_.StepWritten(step, written_ns);
   for (const auto& l : truth.landmarks) {
@@ -107,10 +108,10 @@ void RunEvaluator::AddTruth(const common::GroundTruth& truth, std::int64_t writt
 }
 
 void RunEvaluator::AddEstimate(const std::string& robot_id, const RobotEstimate& estimate) {
-  ++received_;
   RobotRun& robot = robots_.at(robot_id);
   if (estimate.step < robot.next_step || robot.pending.count(estimate.step) > 0) return;
   robot.pending[estimate.step] = estimate;
+  ++taken_;
   ++robot.estimates;
   robot.newest_estimate = std::max(robot.newest_estimate, estimate.step);
   if (estimate.step == static_cast<std::uint32_t>(scenario_.run.steps)) {
@@ -122,10 +123,10 @@ void RunEvaluator::AddEstimate(const std::string& robot_id, const RobotEstimate&
 }
 
 void RunEvaluator::AddOdometry(const std::string& robot_id, const common::Odometry& odometry, std::int64_t written_ns) {
-  ++received_;
   RobotRun& robot = robots_.at(robot_id);
   const std::uint32_t step = odometry.stamp.step;
   if (step < robot.next_step || !robot.odometry.emplace(step, odometry).second) return;
+  ++taken_;
   ++robot.odometry_steps;
   robot.newest_odometry = std::max(robot.newest_odometry, step);
   timing_.SensorWritten(robot_id, step, written_ns);
@@ -133,8 +134,7 @@ void RunEvaluator::AddOdometry(const std::string& robot_id, const common::Odomet
 }
 
 void RunEvaluator::AddFinalTrajectory(const std::string& robot_id, std::uint32_t chunk, std::vector<FinalPose> poses) {
-  ++received_;
-  robots_.at(robot_id).final_chunks[chunk] = std::move(poses);
+  if (robots_.at(robot_id).final_chunks.emplace(chunk, std::move(poses)).second) ++taken_;
 }
 
 bool RunEvaluator::Complete() const { return Missing().empty(); }

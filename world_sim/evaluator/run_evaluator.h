@@ -56,8 +56,9 @@ class RunEvaluator {
   bool Complete() const;
   // What is still missing (for a timeout message).
   std::string Missing() const;
-  // How many messages were taken in so far (it grows only with something new).
-  std::size_t Received() const { return received_; }
+  // How many distinct messages were taken in so far: it grows only with something new, not with a
+  // message sent again (a writer's history replayed).
+  std::size_t Taken() const { return taken_; }
   // Steps, estimates and times held, not yet scored, shown or timed (a run gone out of step
   // holds more).
   std::size_t Pending() const;
@@ -116,7 +117,7 @@ class RunEvaluator {
   std::size_t truth_steps_ = 0;                         // received
   std::uint32_t newest_truth_ = 0;
   std::uint32_t next_view_step_ = 0;  // every step before it is shown
-  std::size_t received_ = 0;
+  std::size_t taken_ = 0;
   DeliveryTiming timing_;
 };
 
