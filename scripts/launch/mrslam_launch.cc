@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -31,6 +32,7 @@
 #include "scripts/launch/progress_monitor.h"
 #include "scripts/launch/run_report.h"
 #include "scripts/launch/run_viewer.h"
+#include "scripts/launch/shm_ports.h"
 #include "scripts/launch/simulation_run.h"
 
 namespace mrslam::launch {
@@ -66,6 +68,7 @@ struct LaunchFlags {
   bool allow_rejected = false;
   std::optional<int> view_port;  // --view: serve a live view of each run on this port
   bool secure = false;
+  int restarts = 0;  // --restart: how many times a dead agent is started again
 };
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
@@ -220,7 +223,8 @@ bool StartEvaluator(ProcessSupervisor* children, const RunArgs& run, ProgressMon
 
 // Reads the summary the evaluator wrote into dir, adds the run's wall time and DDS domain, and
 // writes it back. Returns kOk (and the summary) or kFailed.
-int FinishSummary(const std::string& dir, double wall_s, int domain, json* summary_out) {
+int FinishSummary(const std::string& dir, double wall_s, int domain, const std::map<std::string, int>& restarts,
+                  json* summary_out) {
   const std::string summary_path = dir + "/summary.json";
   std::ifstream in(summary_path);
   if (!in) {
@@ -239,6 +243,12 @@ int FinishSummary(const std::string& dir, double wall_s, int domain, json* summa
   if (summary.contains("wall_seconds")) summary["evaluator_wall_seconds"] = summary["wall_seconds"];
   summary["wall_seconds"] = wall_s;
   summary["dds_domain"] = domain;
+  if (summary.contains("robots") && summary["robots"].is_object()) {
+    for (auto& [id, robot] : summary["robots"].items()) {
+      const auto it = restarts.find("robot_agent_" + id);
+      robot["restarts"] = it == restarts.end() ? 0 : it->second;
+    }
+  }
   {
     const std::string tmp = summary_path + ".tmp";
     std::ofstream out(tmp);
@@ -284,11 +294,13 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
 
   ProgressPrinter printer(progress_prefix);
   std::optional<Clock::time_point> first_step_at;
+  int steps_seen = 0;  // the run's progress: the step every robot has published
   const int total_steps = scenario.run.steps;
   const auto show_progress = [&] {
     if (monitor) {
       const auto now = Clock::now();
       const Progress p = monitor->Poll();
+      steps_seen = p.steps_done;
       if (p.steps_done > 0 && !first_step_at) first_step_at = now;
       std::optional<double> left;
       if (first_step_at && p.steps_done > 1) {
@@ -300,7 +312,13 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   };
   const RunLimits limits{start, flags.timeout_s, kDrainTimeout};
-  const RunEnd end = SuperviseRun(&children, limits, stop, show_progress);
+  RestartPolicy restart{flags.restarts, [&](const ChildExit& e, int n) {
+                          printer.Finish();
+                          std::cerr << kName << ": " << progress_prefix << e.name << " (pid " << e.pid << ") "
+                                    << e.Describe() << " after step " << steps_seen << "; restarting it (restart " << n
+                                    << " of " << flags.restarts << "); log: " << e.log_path << "\n";
+                        }};
+  const RunEnd end = SuperviseRun(&children, limits, stop, show_progress, restart);
   printer.Finish();
   const bool monitor_joined = monitor != nullptr;
   monitor.reset();
@@ -309,7 +327,7 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     if (end.kind == RunEnd::Kind::kStopped) return kStopped;
     return monitor_joined && !first_step_at ? kFailedBeforeStep1 : kFailed;
   }
-  return FinishSummary(dir, Seconds(Clock::now() - start), domain, summary_out);
+  return FinishSummary(dir, Seconds(Clock::now() - start), domain, end.restarts, summary_out);
 }
 
 // What a finished seed prints: one line in a multi-seed run, else the summary table, the outputs
@@ -422,6 +440,13 @@ int Main(LaunchFlags flags) {
       code = run_seed();
     }
     if (code == kFailedBeforeStep1) code = kFailed;
+    // Every process of the seed has ended: what killed ones left in /dev/shm goes too.
+    if (run_flags->common.shared_memory) {
+      if (const int removed = RemoveShmPortFiles(domain); removed > 0) {
+        std::cerr << kName << ": " << prefix << "removed " << removed
+                  << " shared-memory file(s) that killed processes left in /dev/shm\n";
+      }
+    }
     if (code == kFailed && multi) {
       failed.push_back(seed);
       std::cerr << kName << ": seed " << seed << " failed; going on with the next seeds\n";
@@ -467,6 +492,10 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
       ->expected(0, 1)
       ->default_str("8765")
       ->check(CLI::Range(0, 65535));
+  app.add_option("--restart", flags->restarts,
+                 "Start a robot_agent that dies (a signal or a non-zero exit) again with the same command, up to N "
+                 "times per agent; it rejoins the run (docs/faults.md). 0: a dead agent fails the run")
+      ->check(CLI::Range(0, 1000));
   app.add_flag("--secure", flags->secure,
                "DDS-Security on: make identities for the run's processes into OUT/security and pass --security to "
                "every process (docs/security.md)");
