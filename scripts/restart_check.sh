@@ -37,7 +37,7 @@ s = json.load(open(sys.argv[1]))
 for k in ("wall_seconds", "evaluator_wall_seconds", "dds_domain"):
     s.pop(k, None)
 for r in s["robots"].values():
-    for k in ("step_cpu_ms_median", "step_cpu_ms_p99", "restarts"):
+    for k in ("step_cpu_ms_median", "step_cpu_ms_p99", "restarts", "restart_comeback_s"):
         r.pop(k, None)
 print(json.dumps(s, sort_keys=True))
 PY
@@ -52,7 +52,7 @@ unheld_shm() {
 }
 
 failures=0
-printf 'seed robot moment_s killed_after_step completed identical restarts shm_left\n' | tee "$out/table.txt"
+printf 'seed robot moment_s killed_after_step completed identical restarts comeback_s shm_left\n' | tee "$out/table.txt"
 for ((seed = 1; seed <= seeds; ++seed)); do
   victim=${robots[$((RANDOM % ${#robots[@]}))]}
   fraction=$((5 + RANDOM % 86))  # percent of the uninterrupted run's wall time
@@ -81,16 +81,18 @@ for ((seed = 1; seed <= seeds; ++seed)); do
   step=$(grep -o 'after step [0-9]*' "$again/launch.log" | head -1 | grep -o '[0-9]*$' || echo "-")
   identical=no
   restarts=-
+  comeback=-
   if [[ $completed == yes ]]; then
     if [[ $(numbers "$plain/summary.json") == "$(numbers "$again/summary.json")" ]] &&
       cmp -s "$plain/metrics.csv" "$again/metrics.csv"; then identical=yes; fi
-    restarts=$("$python" -c "import json,sys; print(json.load(open(sys.argv[1]))['robots'][sys.argv[2]]['restarts'])" \
-      "$again/summary.json" "$victim")
+    read -r restarts comeback < <("$python" -c "import json,sys; r = json.load(open(sys.argv[1]))['robots'][sys.argv[2]]
+print(r['restarts'], ','.join('%.2f' % s for s in r['restart_comeback_s']) or '-')" "$again/summary.json" "$victim")
   fi
   [[ -z $pid ]] && step="not-killed"
-  printf '%s %s %s %s %s %s %s %s\n' "$seed" "$victim" "$moment" "$step" "$completed" "$identical" "$restarts" "$after" |
+  printf '%s %s %s %s %s %s %s %s %s\n' "$seed" "$victim" "$moment" "$step" "$completed" "$identical" "$restarts" \
+    "$comeback" "$after" |
     tee -a "$out/table.txt"
-  if [[ $completed != yes || $identical != yes || $restarts != 1 || $after != 0 || -z $pid ]]; then
+  if [[ $completed != yes || $identical != yes || $restarts != 1 || $comeback == - || $after != 0 || -z $pid ]]; then
     failures=$((failures + 1))
   fi
 done

@@ -26,6 +26,7 @@
 #include "common/dds/participant.h"
 #include "common/progress_line.h"
 #include "common/seed_range.h"
+#include "scripts/launch/comeback_watch.h"
 #include "scripts/launch/domain_picker.h"
 #include "scripts/launch/identities.h"
 #include "scripts/launch/process_supervisor.h"
@@ -43,6 +44,7 @@ using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 constexpr char kName[] = "mrslam_launch";
+constexpr char kAgentPrefix[] = "robot_agent_";  // the agents' names as children
 constexpr auto kStopGrace = std::chrono::seconds(5);
 // Once world_sim has finished, the agents and the evaluator must finish within this time.
 constexpr auto kDrainTimeout = std::chrono::seconds(120);
@@ -223,7 +225,13 @@ bool StartEvaluator(ProcessSupervisor* children, const RunArgs& run, ProgressMon
 
 // Reads the summary the evaluator wrote into dir, adds the run's wall time and DDS domain, and
 // writes it back. Returns kOk (and the summary) or kFailed.
-int FinishSummary(const std::string& dir, double wall_s, int domain, const std::map<std::string, int>& restarts,
+// The agents restarted during a run: how often, and how long each took to come back.
+struct RestartRecord {
+  std::map<std::string, int> restarts;                    // by child name
+  std::map<std::string, std::vector<double>> comeback_s;  // by robot id
+};
+
+int FinishSummary(const std::string& dir, double wall_s, int domain, const RestartRecord& restarted,
                   json* summary_out) {
   const std::string summary_path = dir + "/summary.json";
   std::ifstream in(summary_path);
@@ -245,8 +253,10 @@ int FinishSummary(const std::string& dir, double wall_s, int domain, const std::
   summary["dds_domain"] = domain;
   if (summary.contains("robots") && summary["robots"].is_object()) {
     for (auto& [id, robot] : summary["robots"].items()) {
-      const auto it = restarts.find("robot_agent_" + id);
-      robot["restarts"] = it == restarts.end() ? 0 : it->second;
+      const auto it = restarted.restarts.find(kAgentPrefix + id);
+      robot["restarts"] = it == restarted.restarts.end() ? 0 : it->second;
+      const auto back = restarted.comeback_s.find(id);
+      robot["restart_comeback_s"] = back == restarted.comeback_s.end() ? std::vector<double>{} : back->second;
     }
   }
   {
@@ -295,12 +305,18 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   ProgressPrinter printer(progress_prefix);
   std::optional<Clock::time_point> first_step_at;
   int steps_seen = 0;  // the run's progress: the step every robot has published
+  ComebackWatch comebacks;
   const int total_steps = scenario.run.steps;
   const auto show_progress = [&] {
     if (monitor) {
       const auto now = Clock::now();
       const Progress p = monitor->Poll();
       steps_seen = p.steps_done;
+      for (const auto& back : comebacks.Update(p, now)) {
+        printer.Finish();
+        std::cerr << kName << ": " << progress_prefix << kAgentPrefix << back.robot_id << " is back at step "
+                  << back.step << ", " << FormatSeconds(back.seconds) << " after its restart\n";
+      }
       if (p.steps_done > 0 && !first_step_at) first_step_at = now;
       std::optional<double> left;
       if (first_step_at && p.steps_done > 1) {
@@ -317,6 +333,9 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
                           std::cerr << kName << ": " << progress_prefix << e.name << " (pid " << e.pid << ") "
                                     << e.Describe() << " after step " << steps_seen << "; restarting it (restart " << n
                                     << " of " << flags.restarts << "); log: " << e.log_path << "\n";
+                          const std::string robot = e.name.substr(std::string(kAgentPrefix).size());
+                          if (monitor) monitor->Restarted(robot);
+                          comebacks.Restarted(robot, Clock::now());
                         }};
   const RunEnd end = SuperviseRun(&children, limits, stop, show_progress, restart);
   printer.Finish();
@@ -327,7 +346,7 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     if (end.kind == RunEnd::Kind::kStopped) return kStopped;
     return monitor_joined && !first_step_at ? kFailedBeforeStep1 : kFailed;
   }
-  return FinishSummary(dir, Seconds(Clock::now() - start), domain, end.restarts, summary_out);
+  return FinishSummary(dir, Seconds(Clock::now() - start), domain, {end.restarts, comebacks.seconds()}, summary_out);
 }
 
 // What a finished seed prints: one line in a multi-seed run, else the summary table, the outputs

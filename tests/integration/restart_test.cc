@@ -77,7 +77,8 @@ nlohmann::json ReadJson(const std::string& path) {
 nlohmann::json Numbers(nlohmann::json summary) {
   for (const char* key : {"wall_seconds", "evaluator_wall_seconds", "dds_domain"}) summary.erase(key);
   for (auto& [id, robot] : summary["robots"].items()) {
-    for (const char* key : {"step_cpu_ms_median", "step_cpu_ms_p99", "restarts"}) robot.erase(key);
+    for (const char* key : {"step_cpu_ms_median", "step_cpu_ms_p99", "restarts", "restart_comeback_s"})
+      robot.erase(key);
   }
   return summary;
 }
@@ -108,6 +109,9 @@ TEST(RestartTest, AKilledAgentComesBackAndTheRunEqualsAnUninterruptedOne) {
   ASSERT_TRUE(summary.is_object());
   EXPECT_EQ(summary["robots"]["r2"]["restarts"], 1);
   EXPECT_EQ(summary["robots"]["r1"]["restarts"], 0);
+  EXPECT_EQ(summary["robots"]["r2"]["restart_comeback_s"].size(), 1u);  // it came back
+  EXPECT_TRUE(summary["robots"]["r1"]["restart_comeback_s"].empty());
+  EXPECT_THAT(output, HasSubstr("robot_agent_r2 is back at step"));
   EXPECT_EQ(summary["robots"]["r2"]["steps_scored"], kSteps);
   EXPECT_EQ(Numbers(summary), Numbers(ReadJson(plain_out + "/summary.json")));
   const std::string metrics = ReadFile(restart_out + "/metrics.csv");
