@@ -271,6 +271,17 @@ int FinishSummary(const std::string& dir, double wall_s, int domain, const Resta
   return kOk;
 }
 
+// With --restart: an agent that a signal ended after it had published its estimate of the last
+// step has done its part (a crash while it shuts down): it is neither restarted nor a failure,
+// and a warning says so. An exit code is never let go (an agent that rejected input ends so).
+bool FinishedBeforeItDied(const ChildExit& e, const Progress& progress, int total_steps) {
+  const auto it = progress.robot_steps.find(e.name.substr(std::string(kAgentPrefix).size()));
+  if (e.signal == 0 || it == progress.robot_steps.end() || it->second < total_steps) return false;
+  std::cerr << kName << ": warning: " << e.name << " (pid " << e.pid << ") " << e.Describe()
+            << " after it had published its last step; not restarted; log: " << e.log_path << "\n";
+  return true;
+}
+
 // Runs one seed into dir. Returns kOk (and the summary), kFailed or kStopped.
 int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, const std::string& scenario_path,
             long long seed, int domain, const std::string& dir, const std::string& progress_prefix,
@@ -306,12 +317,14 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   std::optional<Clock::time_point> first_step_at;
   int steps_seen = 0;  // the run's progress: the step every robot has published
   ComebackWatch comebacks;
+  Progress last_progress;
   const int total_steps = scenario.run.steps;
   const auto show_progress = [&] {
     if (monitor) {
       const auto now = Clock::now();
       const Progress p = monitor->Poll();
       steps_seen = p.steps_done;
+      last_progress = p;
       for (const auto& back : comebacks.Update(p, now)) {
         printer.Finish();
         std::cerr << kName << ": " << progress_prefix << kAgentPrefix << back.robot_id << " is back at step "
@@ -328,7 +341,8 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   };
   const RunLimits limits{start, flags.timeout_s, kDrainTimeout};
-  RestartPolicy restart{flags.restarts, [&](const ChildExit& e, int n) {
+  RestartPolicy restart{flags.restarts,
+                        [&](const ChildExit& e, int n) {
                           printer.Finish();
                           std::cerr << kName << ": " << progress_prefix << e.name << " (pid " << e.pid << ") "
                                     << e.Describe() << " after step " << steps_seen << "; restarting it (restart " << n
@@ -336,7 +350,8 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
                           const std::string robot = e.name.substr(std::string(kAgentPrefix).size());
                           if (monitor) monitor->Restarted(robot);
                           comebacks.Restarted(robot, Clock::now());
-                        }};
+                        },
+                        [&](const ChildExit& e) { return FinishedBeforeItDied(e, last_progress, total_steps); }};
   const RunEnd end = SuperviseRun(&children, limits, stop, show_progress, restart);
   printer.Finish();
   const bool monitor_joined = monitor != nullptr;

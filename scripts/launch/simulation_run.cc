@@ -7,10 +7,12 @@ using Clock = std::chrono::steady_clock;
 
 constexpr char kAgentPrefix[] = "robot_agent_";
 
-// Restarts e's child if the policy allows it; true if it did.
+// Restarts e's child, or lets its death go, if the policy says so; true if it did either.
 bool MaybeRestart(ProcessSupervisor* children, const ChildExit& e, bool world_running, const RestartPolicy& policy,
                   std::map<std::string, int>* restarts) {
-  if (!world_running || e.name.rfind(kAgentPrefix, 0) != 0) return false;
+  if (e.name.rfind(kAgentPrefix, 0) != 0) return false;
+  if (policy.max_restarts > 0 && policy.let_go && policy.let_go(e)) return true;
+  if (!world_running) return false;
   int& done = (*restarts)[e.name];
   if (done >= policy.max_restarts) {
     if (done == 0) restarts->erase(e.name);

@@ -54,6 +54,9 @@ struct RestartPolicy {
   int max_restarts = 0;  // 0: a dead agent fails the run
   // Told of each restart before it happens: how the agent ended and which restart this is (1..).
   std::function<void(const ChildExit&, int)> on_restart;
+  // Asked first about every agent that dies: true if its death is to be let go (neither a restart
+  // nor a failure), e.g. a crash after it had published its last step.
+  std::function<bool(const ChildExit&)> let_go;
 };
 
 // How a supervised run ended. Unless kDone, children may still run: the caller stops them.

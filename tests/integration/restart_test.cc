@@ -14,21 +14,17 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/dds/participant.h"
-#include "mrslamPubSubTypes.h"
 #include "tests/integration/child_process.h"
+#include "tests/integration/launch_helpers.h"
 
 namespace mrslam {
 namespace {
 
-using std::chrono::milliseconds;
 using std::chrono::seconds;
-using testing::BinPath;
 using testing::ChildProcess;
 using testing::FindProcess;
 using ::testing::HasSubstr;
 using testing::ReadFile;
-using testing::SourcePath;
 using testing::WaitForChildren;
 
 // This test's own DDS domains.
@@ -39,33 +35,9 @@ constexpr int kSteps = 150;
 constexpr std::uint32_t kKillAfterStep = 20;
 
 std::vector<std::string> LaunchArgs(const std::string& out, int domain, const std::vector<std::string>& extra) {
-  std::vector<std::string> argv = {BinPath("mrslam_launch"),
-                                   "--scenario",
-                                   SourcePath("config/paper_two_robots.yaml"),
-                                   "--out",
-                                   out,
-                                   "--domain",
-                                   std::to_string(domain),
-                                   "--no-plots",
-                                   "--set",
-                                   "filter.particles=100",
-                                   "--set",
-                                   "run.steps=" + std::to_string(kSteps)};
-  argv.insert(argv.end(), extra.begin(), extra.end());
-  return argv;
-}
-
-// Waits until the robot's estimate of `step` has been published; true when seen in time.
-bool WaitForEstimateStep(int domain, const std::string& robot, std::uint32_t step, ChildProcess& launcher) {
-  dds::Participant participant({domain, "restart_test", false});
-  dds::Reader<msg::EstimatePubSubType> reader(participant, dds::EstimateTopic(robot));
-  const auto deadline = std::chrono::steady_clock::now() + seconds(120);
-  msg::Estimate estimate;
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (reader.Take(&estimate, milliseconds(100)) && estimate.stamp().step() >= step) return true;
-    if (launcher.WaitExit(milliseconds(0)).has_value()) return false;
-  }
-  return false;
+  std::vector<std::string> args = {"--no-plots", "--set", "run.steps=" + std::to_string(kSteps)};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return testing::TwoRobotLaunchArgs(out, domain, args);
 }
 
 nlohmann::json ReadJson(const std::string& path) {
@@ -92,7 +64,7 @@ TEST(RestartTest, AKilledAgentComesBackAndTheRunEqualsAnUninterruptedOne) {
   ChildProcess restarted(LaunchArgs(restart_out, kRestartDomain, {"--restart", "2"}), temp_dir.path() + "/restart.log");
   ASSERT_TRUE(plain.started());
   ASSERT_TRUE(restarted.started());
-  ASSERT_TRUE(WaitForEstimateStep(kRestartDomain, "r2", kKillAfterStep, restarted))
+  ASSERT_TRUE(testing::WaitForEstimateStep(kRestartDomain, "r2", kKillAfterStep, restarted, seconds(120)))
       << ReadFile(temp_dir.path() + "/restart.log");
   const auto children = WaitForChildren(restarted.pid(), 4, seconds(10));
   const pid_t victim = FindProcess(children, {"robot_agent", "--robot r2"});

@@ -107,11 +107,13 @@ TEST_F(SimulationRunTest, ADeadAgentIsRestartedWithTheSameCommandUpToTheLimit) {
   Start("robot_agent_r1", FailingAgent(2));
   Start("world_sim", "sleep 3");
   std::vector<int> told;
-  const RunEnd end = Supervise({}, {2, [&](const ChildExit& e, int n) {
+  const RunEnd end = Supervise({}, {2,
+                                    [&](const ChildExit& e, int n) {
                                       EXPECT_EQ(e.name, "robot_agent_r1");
                                       EXPECT_EQ(e.exit_code, 3);
                                       told.push_back(n);
-                                    }});
+                                    },
+                                    nullptr});
   EXPECT_EQ(end.kind, RunEnd::Kind::kDone);
   EXPECT_THAT(told, ElementsAre(1, 2));
   EXPECT_EQ(end.restarts.at("robot_agent_r1"), 2);
@@ -122,7 +124,7 @@ TEST_F(SimulationRunTest, ADeadAgentIsRestartedWithTheSameCommandUpToTheLimit) {
 TEST_F(SimulationRunTest, AnAgentDeadOnceMoreThanTheLimitFailsTheRun) {
   Start("robot_agent_r1", FailingAgent(2));
   Start("world_sim", "sleep 30");
-  const RunEnd end = Supervise({}, {1, nullptr});
+  const RunEnd end = Supervise({}, {1, nullptr, nullptr});
   ASSERT_EQ(end.kind, RunEnd::Kind::kFailed);
   EXPECT_EQ(end.failure->name, "robot_agent_r1");
   EXPECT_EQ(end.restarts.at("robot_agent_r1"), 1);
@@ -131,7 +133,7 @@ TEST_F(SimulationRunTest, AnAgentDeadOnceMoreThanTheLimitFailsTheRun) {
 TEST_F(SimulationRunTest, OnlyAgentsAreRestartedAndOnlyWhileTheSimulatorRuns) {
   Start("evaluator", "exit 4");
   Start("world_sim", "sleep 30");
-  RunEnd end = Supervise({}, {3, nullptr});
+  RunEnd end = Supervise({}, {3, nullptr, nullptr});
   ASSERT_EQ(end.kind, RunEnd::Kind::kFailed);
   EXPECT_EQ(end.failure->name, "evaluator");
   EXPECT_TRUE(end.restarts.empty());
@@ -139,9 +141,22 @@ TEST_F(SimulationRunTest, OnlyAgentsAreRestartedAndOnlyWhileTheSimulatorRuns) {
 
   Start("world_sim", "exit 0");
   Start("robot_agent_r2", "sleep 0.3; exit 5");
-  end = Supervise({}, {3, nullptr});
+  end = Supervise({}, {3, nullptr, nullptr});
   ASSERT_EQ(end.kind, RunEnd::Kind::kFailed);
   EXPECT_EQ(end.failure->name, "robot_agent_r2");
+  EXPECT_TRUE(end.restarts.empty());
+}
+
+TEST_F(SimulationRunTest, AnAgentsDeathTheCallerLetsGoIsNeitherRestartedNorAFailure) {
+  Start("robot_agent_r1", "kill -9 $$");
+  Start("world_sim", "sleep 0.5");
+  RestartPolicy policy{1, [](const ChildExit&, int) { ADD_FAILURE() << "restarted"; },
+                       [](const ChildExit& e) {
+                         EXPECT_EQ(e.signal, 9);
+                         return true;
+                       }};
+  const RunEnd end = Supervise({}, policy);
+  EXPECT_EQ(end.kind, RunEnd::Kind::kDone);
   EXPECT_TRUE(end.restarts.empty());
 }
 
