@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <set>
 #include <tuple>
 
 #include <spdlog/spdlog.h>
@@ -44,7 +45,10 @@ struct AgentNode::Impl {
   cooperation::Cooperation cooperation;
   // Peer messages received, by the sender's step: applied at the start of the next step.
   std::map<std::uint32_t, cooperation::PeerInbox> inbox;
-  std::map<std::pair<std::string, std::uint32_t>, std::uint32_t> received;  // (sender, step) -> count
+  // (sender, step) -> the sequence numbers received, for the steps not yet applied.
+  std::map<std::pair<std::string, std::uint32_t>, std::set<std::uint32_t>> received;
+  // The highest sequence number of the messages of each sender's steps already applied.
+  std::map<std::string, std::uint32_t> applied_sequence;
   std::map<std::string, std::uint32_t> sent_sequence;
   AgentCounters counters;
   std::uint32_t next_step = 1;
@@ -158,6 +162,11 @@ struct AgentNode::Impl {
       Reject(Rejection::kMalformed, "peer message for '" + h.recipient + "' in " + agent.robot_id + "'s inbox");
       return;
     }
+    if (IsReplay(h)) {
+      spdlog::debug("peer message {} of step {} from {} received again (a restarted peer replays): ignored", h.sequence,
+                    h.step, h.sender);
+      return;
+    }
     if (h.step + 1 < next_step) {
       Reject(Rejection::kStale, "peer message of step " + std::to_string(h.step) + " from " + h.sender);
       return;
@@ -166,8 +175,18 @@ struct AgentNode::Impl {
       Reject(Rejection::kBeyondHorizon, "peer message of step " + std::to_string(h.step) + " from " + h.sender);
       return;
     }
-    ++received[{h.sender, h.step}];
+    received[{h.sender, h.step}].insert(h.sequence);
     (inbox[h.step].*list).push_back(std::move(message));
+  }
+
+  // A message this agent already has: a peer that was restarted sends again, with the same
+  // sequence numbers, what it sent before it died (docs/faults.md). Sequence numbers grow with the
+  // sender's steps, so one at or below those of the steps applied is a replay.
+  bool IsReplay(const cooperation::PeerHeader& h) const {
+    if (const auto a = applied_sequence.find(h.sender); a != applied_sequence.end() && h.sequence <= a->second)
+      return true;
+    const auto r = received.find({h.sender, h.step});
+    return r != received.end() && r->second.count(h.sequence) > 0;
   }
 
   // How many peer messages to this agent the clock of step k announces from each sender (those
@@ -184,7 +203,7 @@ struct AgentNode::Impl {
   bool PeerMessagesComplete(const msg::StepClock& c) const {
     for (const auto& [sender, count] : Announced(c)) {
       const auto it = received.find({sender, c.stamp().step() - 1});
-      if ((it == received.end() ? 0U : it->second) < count) return false;
+      if ((it == received.end() ? 0U : it->second.size()) < count) return false;
     }
     return true;
   }
@@ -203,12 +222,17 @@ struct AgentNode::Impl {
       }
       const auto a = announced.find(it->first.first);
       const std::uint32_t expected = a == announced.end() ? 0U : a->second;
-      if (options.lockstep && it->second > expected) {
+      const auto count = static_cast<std::uint32_t>(it->second.size());
+      if (options.lockstep && count > expected) {
         Reject(cooperation::Rejection::kContested,
-               fmt::format("{} peer message(s) of step {} from {} where the simulator counted {}; none is used",
-                           it->second, sent_step, it->first.first, expected),
-               it->second - expected);
+               fmt::format("{} peer message(s) of step {} from {} where the simulator counted {}; none is used", count,
+                           sent_step, it->first.first, expected),
+               count - expected);
         DropPeerMessages(sent_step, it->first.first);
+      }
+      if (!it->second.empty()) {
+        auto& applied = applied_sequence[it->first.first];
+        applied = std::max(applied, *it->second.rbegin());
       }
       it = received.erase(it);
     }

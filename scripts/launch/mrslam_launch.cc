@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -26,6 +27,7 @@
 #include "common/dds/participant.h"
 #include "common/progress_line.h"
 #include "common/seed_range.h"
+#include "scripts/launch/comeback_watch.h"
 #include "scripts/launch/domain_picker.h"
 #include "scripts/launch/identities.h"
 #include "scripts/launch/process_supervisor.h"
@@ -43,6 +45,7 @@ using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 constexpr char kName[] = "mrslam_launch";
+constexpr char kAgentPrefix[] = "robot_agent_";  // the agents' names as children
 constexpr auto kStopGrace = std::chrono::seconds(5);
 // Once world_sim has finished, the agents and the evaluator must finish within this time.
 constexpr auto kDrainTimeout = std::chrono::seconds(120);
@@ -68,6 +71,7 @@ struct LaunchFlags {
   bool allow_rejected = false;
   std::optional<int> view_port;  // --view: serve a live view of each run on this port
   bool secure = false;
+  int restarts = 0;  // --restart: how many times a dead agent is started again
 };
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
@@ -236,7 +240,14 @@ struct RunCost {
 
 // Reads the summary the evaluator wrote into dir, adds the run's cost and DDS domain, and
 // writes it back. Returns kOk (and the summary) or kFailed.
-int FinishSummary(const std::string& dir, const RunCost& cost, int domain, json* summary_out) {
+// The agents restarted during a run: how often, and how long each took to come back.
+struct RestartRecord {
+  std::map<std::string, int> restarts;                    // by child name
+  std::map<std::string, std::vector<double>> comeback_s;  // by robot id
+};
+
+int FinishSummary(const std::string& dir, const RunCost& cost, int domain, const RestartRecord& restarted,
+                  json* summary_out) {
   const std::string summary_path = dir + "/summary.json";
   std::ifstream in(summary_path);
   if (!in) {
@@ -257,6 +268,14 @@ int FinishSummary(const std::string& dir, const RunCost& cost, int domain, json*
   summary["cpu_seconds"] = cost.cpu_s;
   summary["cpu_cores_mean"] = cost.wall_s > 0.0 ? cost.cpu_s / cost.wall_s : 0.0;
   summary["dds_domain"] = domain;
+  if (summary.contains("robots") && summary["robots"].is_object()) {
+    for (auto& [id, robot] : summary["robots"].items()) {
+      const auto it = restarted.restarts.find(kAgentPrefix + id);
+      robot["restarts"] = it == restarted.restarts.end() ? 0 : it->second;
+      const auto back = restarted.comeback_s.find(id);
+      robot["restart_comeback_s"] = back == restarted.comeback_s.end() ? std::vector<double>{} : back->second;
+    }
+  }
   {
     const std::string tmp = summary_path + ".tmp";
     std::ofstream out(tmp);
@@ -267,6 +286,17 @@ int FinishSummary(const std::string& dir, const RunCost& cost, int domain, json*
   }
   *summary_out = summary;
   return kOk;
+}
+
+// With --restart: an agent that a signal ended after it had published its estimate of the last
+// step has done its part (a crash while it shuts down): it is neither restarted nor a failure,
+// and a warning says so. An exit code is never let go (an agent that rejected input ends so).
+bool FinishedBeforeItDied(const ChildExit& e, const Progress& progress, int total_steps) {
+  const auto it = progress.robot_steps.find(e.name.substr(std::string(kAgentPrefix).size()));
+  if (e.signal == 0 || it == progress.robot_steps.end() || it->second < total_steps) return false;
+  std::cerr << kName << ": warning: " << e.name << " (pid " << e.pid << ") " << e.Describe()
+            << " after it had published its last step; not restarted; log: " << e.log_path << "\n";
+  return true;
 }
 
 // Runs one seed into dir. Returns kOk (and the summary), kFailed or kStopped.
@@ -303,11 +333,21 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
 
   ProgressPrinter printer(progress_prefix);
   std::optional<Clock::time_point> first_step_at;
+  int steps_seen = 0;  // the run's progress: the step every robot has published
+  ComebackWatch comebacks;
+  Progress last_progress;
   const int total_steps = scenario.run.steps;
   const auto show_progress = [&] {
     if (monitor) {
       const auto now = Clock::now();
       const Progress p = monitor->Poll();
+      steps_seen = p.steps_done;
+      last_progress = p;
+      for (const auto& back : comebacks.Update(p, now)) {
+        printer.Finish();
+        std::cerr << kName << ": " << progress_prefix << kAgentPrefix << back.robot_id << " is back at step "
+                  << back.step << ", " << FormatSeconds(back.seconds) << " after its restart\n";
+      }
       if (p.steps_done > 0 && !first_step_at) first_step_at = now;
       std::optional<double> left;
       if (first_step_at && p.steps_done > 1) {
@@ -319,7 +359,18 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   };
   const RunLimits limits{start, flags.timeout_s, kDrainTimeout};
-  const RunEnd end = SuperviseRun(&children, limits, stop, show_progress);
+  RestartPolicy restart{flags.restarts,
+                        [&](const ChildExit& e, int n) {
+                          printer.Finish();
+                          std::cerr << kName << ": " << progress_prefix << e.name << " (pid " << e.pid << ") "
+                                    << e.Describe() << " after step " << steps_seen << "; restarting it (restart " << n
+                                    << " of " << flags.restarts << "); log: " << e.log_path << "\n";
+                          const std::string robot = e.name.substr(std::string(kAgentPrefix).size());
+                          if (monitor) monitor->Restarted(robot);
+                          comebacks.Restarted(robot, Clock::now());
+                        },
+                        [&](const ChildExit& e) { return FinishedBeforeItDied(e, last_progress, total_steps); }};
+  const RunEnd end = SuperviseRun(&children, limits, stop, show_progress, restart);
   printer.Finish();
   const bool monitor_joined = monitor != nullptr;
   monitor.reset();
@@ -330,7 +381,7 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     return monitor_joined && !first_step_at ? kFailedBeforeStep1 : kFailed;
   }
   const RunCost cost{Seconds(Clock::now() - start), common::ProcessTreeCpuSeconds() - cpu_start};
-  return FinishSummary(dir, cost, domain, summary_out);
+  return FinishSummary(dir, cost, domain, {end.restarts, comebacks.seconds()}, summary_out);
 }
 
 // What a finished seed prints: one line in a multi-seed run, else the summary table, the outputs
@@ -488,6 +539,10 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
       ->expected(0, 1)
       ->default_str("8765")
       ->check(CLI::Range(0, 65535));
+  app.add_option("--restart", flags->restarts,
+                 "Start a robot_agent that dies (a signal or a non-zero exit) again with the same command, up to N "
+                 "times per agent; it rejoins the run (docs/faults.md). 0: a dead agent fails the run")
+      ->check(CLI::Range(0, 1000));
   app.add_flag("--secure", flags->secure,
                "DDS-Security on: make identities for the run's processes into OUT/security and pass --security to "
                "every process (docs/security.md)");

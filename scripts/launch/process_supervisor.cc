@@ -53,11 +53,26 @@ ProcessSupervisor::~ProcessSupervisor() {
 
 pid_t ProcessSupervisor::Start(const std::string& name, const std::vector<std::string>& argv,
                                const std::string& log_path) {
+  return Launch(name, argv, log_path, O_TRUNC);
+}
+
+pid_t ProcessSupervisor::Restart(const std::string& name) {
+  for (auto it = children_.rbegin(); it != children_.rend(); ++it) {
+    if (it->name != name) continue;
+    if (!it->reaped) throw std::runtime_error("cannot restart " + name + ": it is still running");
+    const Child ended = *it;  // Launch appends to children_
+    return Launch(ended.name, ended.argv, ended.log_path, O_APPEND);
+  }
+  throw std::runtime_error("cannot restart " + name + ": no such process was started");
+}
+
+pid_t ProcessSupervisor::Launch(const std::string& name, const std::vector<std::string>& argv,
+                                const std::string& log_path, int log_flags) {
   if (argv.empty() || access(argv[0].c_str(), X_OK) != 0) {
     throw std::runtime_error("cannot run '" + (argv.empty() ? std::string() : argv[0]) + "' (" +
                              (argv.empty() ? "no command" : std::strerror(errno)) + ")");
   }
-  const int log_fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int log_fd = open(log_path.c_str(), O_WRONLY | O_CREAT | log_flags | O_CLOEXEC, 0644);
   if (log_fd < 0) throw std::runtime_error("cannot write '" + log_path + "': " + std::strerror(errno));
   const int null_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
   // Everything the child needs is prepared before fork: after it only system calls are safe.
@@ -100,7 +115,7 @@ pid_t ProcessSupervisor::Start(const std::string& name, const std::vector<std::s
   // Also set the group from the parent, so it holds before either side runs on.
   if (group_ == 0) group_ = pid;
   setpgid(pid, group_);  // may fail harmlessly once the child has exec'ed (it did it itself)
-  children_.push_back({name, pid, log_path, false});
+  children_.push_back({name, pid, log_path, false, argv});
   return pid;
 }
 

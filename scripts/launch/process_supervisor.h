@@ -40,6 +40,11 @@ class ProcessSupervisor {
   // is missing or the process cannot be created.
   pid_t Start(const std::string& name, const std::vector<std::string>& argv, const std::string& log_path);
 
+  // Starts again, with the same command, a child that has ended and been reaped; its output is
+  // appended to the same log. Throws std::runtime_error when no such child has ended or the
+  // process cannot be created.
+  pid_t Restart(const std::string& name);
+
   // Reaps the children that have ended since the last call (without blocking), in pid order.
   std::vector<ChildExit> Reap();
 
@@ -60,7 +65,10 @@ class ProcessSupervisor {
     pid_t pid = -1;
     std::string log_path;
     bool reaped = false;
+    std::vector<std::string> argv;
   };
+  pid_t Launch(const std::string& name, const std::vector<std::string>& argv, const std::string& log_path,
+               int log_flags);
   static ChildExit ToExit(const Child& child, int status);
 
   std::vector<Child> children_;

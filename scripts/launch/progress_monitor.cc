@@ -79,6 +79,7 @@ Progress ProgressMonitor::Poll() {
   for (const auto& entry : last_step_) lowest = std::min(lowest, entry.second);
   p.steps_done = last_step_.empty() ? clock_step_ : lowest;
   p.rendezvous = CountEncounters(events_);
+  p.robot_steps = last_step_;
   return p;
 }
 

@@ -12,9 +12,10 @@ namespace mrslam::launch {
 
 // What the monitor has seen so far.
 struct Progress {
-  int steps_done = 0;  // the lowest step for which every robot has published its estimate
-  int clock_step = 0;  // the last step the simulator has published
-  int rendezvous = 0;  // encounters reported by the agents (each pair and step counted once)
+  int steps_done = 0;                      // the lowest step for which every robot has published its estimate
+  int clock_step = 0;                      // the last step the simulator has published
+  int rendezvous = 0;                      // encounters reported by the agents (each pair and step counted once)
+  std::map<std::string, int> robot_steps;  // robot -> the last step of its estimates
 };
 
 // Joins a run's DDS domain, notes which participants join, and reads the simulator's clock and
@@ -35,6 +36,9 @@ class ProgressMonitor {
 
   // Takes every queued sample and returns the progress so far.
   Progress Poll();
+
+  // Forgets how far a robot had come: its agent was restarted and publishes again from step 1.
+  void Restarted(const std::string& robot_id) { last_step_[robot_id] = 0; }
 
  private:
   struct Impl;

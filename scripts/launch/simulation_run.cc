@@ -4,6 +4,26 @@ namespace mrslam::launch {
 
 namespace {
 using Clock = std::chrono::steady_clock;
+
+constexpr char kAgentPrefix[] = "robot_agent_";
+
+// Restarts e's child, or lets its death go, if the policy says so; true if it did either.
+bool MaybeRestart(ProcessSupervisor* children, const ChildExit& e, bool world_running, const RestartPolicy& policy,
+                  std::map<std::string, int>* restarts) {
+  if (e.name.rfind(kAgentPrefix, 0) != 0) return false;
+  if (policy.max_restarts > 0 && policy.let_go && policy.let_go(e)) return true;
+  if (!world_running) return false;
+  int& done = (*restarts)[e.name];
+  if (done >= policy.max_restarts) {
+    if (done == 0) restarts->erase(e.name);
+    return false;
+  }
+  ++done;
+  if (policy.on_restart) policy.on_restart(e, done);
+  children->Restart(e.name);
+  return true;
+}
+
 }  // namespace
 
 std::vector<std::string> ChildCommand(const RunArgs& run, const std::string& executable,
@@ -32,23 +52,26 @@ void StartSimulation(ProcessSupervisor* children, const RunArgs& run, const std:
 }
 
 RunEnd SuperviseRun(ProcessSupervisor* children, const RunLimits& limits, const std::atomic<bool>& stop,
-                    const std::function<void()>& tick) {
+                    const std::function<void()>& tick, const RestartPolicy& restart) {
   std::optional<Clock::time_point> world_done_at;
+  std::map<std::string, int> restarts;
+  const auto end = [&](RunEnd::Kind kind, std::optional<ChildExit> failure = std::nullopt) {
+    return RunEnd{kind, std::move(failure), restarts};
+  };
   while (true) {
-    if (stop) return {RunEnd::Kind::kStopped, std::nullopt};
+    if (stop) return end(RunEnd::Kind::kStopped);
     std::optional<ChildExit> failure;
     for (auto& e : children->Reap()) {
-      if (!e.ok() && !failure) failure = e;
       if (e.ok() && e.name == "world_sim") world_done_at = Clock::now();
+      if (e.ok() || failure || MaybeRestart(children, e, !world_done_at, restart, &restarts)) continue;
+      failure = e;
     }
-    if (failure) return {RunEnd::Kind::kFailed, failure};
-    if (children->running() == 0) return {};
+    if (failure) return end(RunEnd::Kind::kFailed, failure);
+    if (children->running() == 0) return end(RunEnd::Kind::kDone);
     const auto now = Clock::now();
     if (limits.timeout_s > 0 && now - limits.start > std::chrono::duration<double>(limits.timeout_s))
-      return {RunEnd::Kind::kTimedOut, std::nullopt};
-    if (world_done_at && now - *world_done_at > limits.drain_timeout) {
-      return {RunEnd::Kind::kDrainTimedOut, std::nullopt};
-    }
+      return end(RunEnd::Kind::kTimedOut);
+    if (world_done_at && now - *world_done_at > limits.drain_timeout) return end(RunEnd::Kind::kDrainTimedOut);
     tick();
   }
 }

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -46,17 +47,30 @@ struct RunLimits {
   std::chrono::seconds drain_timeout{120};
 };
 
+// Which children come back when they die: a robot_agent that ends by a signal or a non-zero exit
+// while world_sim still runs is started again with the same command, up to max_restarts times
+// per agent; the restarted agent rejoins the run (docs/faults.md).
+struct RestartPolicy {
+  int max_restarts = 0;  // 0: a dead agent fails the run
+  // Told of each restart before it happens: how the agent ended and which restart this is (1..).
+  std::function<void(const ChildExit&, int)> on_restart;
+  // Asked first about every agent that dies: true if its death is to be let go (neither a restart
+  // nor a failure), e.g. a crash after it had published its last step.
+  std::function<bool(const ChildExit&)> let_go;
+};
+
 // How a supervised run ended. Unless kDone, children may still run: the caller stops them.
 struct RunEnd {
   enum class Kind { kDone, kFailed, kTimedOut, kDrainTimedOut, kStopped };
   Kind kind = Kind::kDone;
-  std::optional<ChildExit> failure;  // kFailed: the first child that failed
+  std::optional<ChildExit> failure;     // kFailed: the first child that failed
+  std::map<std::string, int> restarts;  // by child name, those restarted at least once
 };
 
 // Watches the children until every one has ended, one has failed, a limit has run out or stop
-// has been raised. tick() runs between the checks: the caller's reading and progress, which
-// also paces the loop (it should wait a few milliseconds).
+// has been raised, restarting dead agents as the policy says. tick() runs between the checks: the
+// caller's reading and progress, which also paces the loop (it should wait a few milliseconds).
 RunEnd SuperviseRun(ProcessSupervisor* children, const RunLimits& limits, const std::atomic<bool>& stop,
-                    const std::function<void()>& tick);
+                    const std::function<void()>& tick, const RestartPolicy& restart = {});
 
 }  // namespace mrslam::launch

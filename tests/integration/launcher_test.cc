@@ -25,13 +25,13 @@
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
 #include "tests/integration/child_process.h"
+#include "tests/integration/launch_helpers.h"
 
 namespace mrslam {
 namespace {
 
 using std::chrono::milliseconds;
 using std::chrono::seconds;
-using testing::BinPath;
 using testing::ChildProcess;
 using testing::ChildrenOf;
 using testing::FindProcess;
@@ -40,8 +40,8 @@ using ::testing::HasSubstr;
 using testing::NoneLeft;
 using ::testing::Not;
 using testing::ReadFile;
-using testing::SourcePath;
 using testing::WaitForChildren;
+using testing::WaitForEstimateStep;
 
 // This test's own DDS domains: 120..129.
 constexpr int kSummaryDomain = 120;
@@ -58,17 +58,7 @@ constexpr int kStopDomain = 129;
 constexpr int kShortSteps = 12;
 
 std::vector<std::string> LaunchArgs(const std::string& out, int domain, const std::vector<std::string>& extra) {
-  std::vector<std::string> argv = {BinPath("mrslam_launch"),
-                                   "--scenario",
-                                   SourcePath("config/paper_two_robots.yaml"),
-                                   "--out",
-                                   out,
-                                   "--domain",
-                                   std::to_string(domain),
-                                   "--set",
-                                   "filter.particles=100"};
-  argv.insert(argv.end(), extra.begin(), extra.end());
-  return argv;
+  return testing::TwoRobotLaunchArgs(out, domain, extra);
 }
 
 bool HasMatplotlib() { return std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") == 0; }
@@ -80,21 +70,6 @@ std::vector<std::string> Lines(const std::string& text) {
     if (!line.empty()) lines.push_back(line);
   }
   return lines;
-}
-
-// Waits until the robot's estimate of at least `step` has been published (or the timeout, or
-// the launcher ended). True when seen.
-bool WaitForEstimateStep(int domain, const std::string& robot, std::uint32_t step, ChildProcess& launcher,
-                         seconds timeout) {
-  dds::Participant participant({domain, "launcher_test", false});
-  dds::Reader<msg::EstimatePubSubType> reader(participant, dds::EstimateTopic(robot));
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  msg::Estimate estimate;
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (reader.Take(&estimate, milliseconds(100)) && estimate.stamp().step() >= step) return true;
-    if (launcher.WaitExit(milliseconds(0)).has_value()) return false;
-  }
-  return false;
 }
 
 // The launcher's children once all of them (evaluator, world_sim, one agent per robot) run.

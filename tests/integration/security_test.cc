@@ -20,6 +20,7 @@
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
 #include "tests/integration/child_process.h"
+#include "tests/integration/launch_helpers.h"
 
 namespace mrslam {
 namespace {
@@ -60,20 +61,9 @@ bool HasOpenssl() { return std::system("command -v openssl >/dev/null 2>&1") == 
 }
 
 std::vector<std::string> LaunchArgs(const std::string& out, int domain, int steps, bool secure) {
-  std::vector<std::string> argv = {BinPath("mrslam_launch"),
-                                   "--scenario",
-                                   SourcePath("config/paper_two_robots.yaml"),
-                                   "--out",
-                                   out,
-                                   "--domain",
-                                   std::to_string(domain),
-                                   "--no-plots",
-                                   "--set",
-                                   "filter.particles=100",
-                                   "--set",
-                                   "run.steps=" + std::to_string(steps)};
-  if (secure) argv.emplace_back("--secure");
-  return argv;
+  std::vector<std::string> extra = {"--no-plots", "--set", "run.steps=" + std::to_string(steps)};
+  if (secure) extra.emplace_back("--secure");
+  return testing::TwoRobotLaunchArgs(out, domain, extra);
 }
 
 nlohmann::json Summary(const std::string& out) {

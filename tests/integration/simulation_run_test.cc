@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -34,11 +35,21 @@ class SimulationRunTest : public ::testing::Test {
   void Start(const std::string& name, const std::string& script) {
     children_.Start(name, Shell(script), (dir_ / (name + ".log")).string());
   }
-  RunEnd Supervise(const RunLimits& limits) {
-    return SuperviseRun(&children_, limits, stop_, [this] {
-      ++ticks_;
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    });
+  RunEnd Supervise(const RunLimits& limits, const RestartPolicy& restart = {}) {
+    return SuperviseRun(
+        &children_, limits, stop_,
+        [this] {
+          ++ticks_;
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        },
+        restart);
+  }
+  // A stand-in agent that fails (exit 3) the first `failures` times it runs, then ends well;
+  // each run appends a line to its log.
+  std::string FailingAgent(int failures) const {
+    const std::string count = (dir_ / "runs").string();
+    return "n=$(cat " + count + " 2>/dev/null || echo 0); echo $((n + 1)) > " + count + "; echo run $n; [ $n -ge " +
+           std::to_string(failures) + " ] && exit 0; exit 3";
   }
 
   std::filesystem::path dir_;
@@ -90,6 +101,70 @@ TEST_F(SimulationRunTest, TheOthersMustFinishSoonAfterTheSimulator) {
   Start("robot_agent_r1", "sleep 30");
   EXPECT_EQ(Supervise({std::chrono::steady_clock::now(), 0.0, std::chrono::seconds(0)}).kind,
             RunEnd::Kind::kDrainTimedOut);
+}
+
+TEST_F(SimulationRunTest, ADeadAgentIsRestartedWithTheSameCommandUpToTheLimit) {
+  Start("robot_agent_r1", FailingAgent(2));
+  Start("world_sim", "sleep 3");
+  std::vector<int> told;
+  const RunEnd end = Supervise({}, {2,
+                                    [&](const ChildExit& e, int n) {
+                                      EXPECT_EQ(e.name, "robot_agent_r1");
+                                      EXPECT_EQ(e.exit_code, 3);
+                                      told.push_back(n);
+                                    },
+                                    nullptr});
+  EXPECT_EQ(end.kind, RunEnd::Kind::kDone);
+  EXPECT_THAT(told, ElementsAre(1, 2));
+  EXPECT_EQ(end.restarts.at("robot_agent_r1"), 2);
+  // The restarted agent's output follows the dead one's in the same log.
+  EXPECT_EQ(TailOfFile((dir_ / "robot_agent_r1.log").string(), 10), "run 0\nrun 1\nrun 2\n");
+}
+
+TEST_F(SimulationRunTest, AnAgentDeadOnceMoreThanTheLimitFailsTheRun) {
+  Start("robot_agent_r1", FailingAgent(2));
+  Start("world_sim", "sleep 30");
+  const RunEnd end = Supervise({}, {1, nullptr, nullptr});
+  ASSERT_EQ(end.kind, RunEnd::Kind::kFailed);
+  EXPECT_EQ(end.failure->name, "robot_agent_r1");
+  EXPECT_EQ(end.restarts.at("robot_agent_r1"), 1);
+}
+
+TEST_F(SimulationRunTest, OnlyAgentsAreRestartedAndOnlyWhileTheSimulatorRuns) {
+  Start("evaluator", "exit 4");
+  Start("world_sim", "sleep 30");
+  RunEnd end = Supervise({}, {3, nullptr, nullptr});
+  ASSERT_EQ(end.kind, RunEnd::Kind::kFailed);
+  EXPECT_EQ(end.failure->name, "evaluator");
+  EXPECT_TRUE(end.restarts.empty());
+  children_.StopAll(std::chrono::seconds(1));
+
+  Start("world_sim", "exit 0");
+  Start("robot_agent_r2", "sleep 0.3; exit 5");
+  end = Supervise({}, {3, nullptr, nullptr});
+  ASSERT_EQ(end.kind, RunEnd::Kind::kFailed);
+  EXPECT_EQ(end.failure->name, "robot_agent_r2");
+  EXPECT_TRUE(end.restarts.empty());
+}
+
+TEST_F(SimulationRunTest, AnAgentsDeathTheCallerLetsGoIsNeitherRestartedNorAFailure) {
+  Start("robot_agent_r1", "kill -9 $$");
+  Start("world_sim", "sleep 0.5");
+  RestartPolicy policy{1, [](const ChildExit&, int) { ADD_FAILURE() << "restarted"; },
+                       [](const ChildExit& e) {
+                         EXPECT_EQ(e.signal, 9);
+                         return true;
+                       }};
+  const RunEnd end = Supervise({}, policy);
+  EXPECT_EQ(end.kind, RunEnd::Kind::kDone);
+  EXPECT_TRUE(end.restarts.empty());
+}
+
+TEST(ProcessSupervisorTest, OnlyAnEndedChildCanBeRestarted) {
+  ProcessSupervisor children;
+  EXPECT_THROW(children.Restart("robot_agent_r1"), std::runtime_error);
+  children.Start("robot_agent_r1", {"/bin/sh", "-c", "sleep 30"}, "/dev/null");
+  EXPECT_THROW(children.Restart("robot_agent_r1"), std::runtime_error);
 }
 
 }  // namespace

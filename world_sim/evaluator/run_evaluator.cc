@@ -91,10 +91,6 @@ void RunEvaluator::AddTruth(const common::GroundTruth& truth, std::int64_t writt
   ++taken_;
   newest_truth_ = std::max(newest_truth_, step);
   timing_.StepWritten(step, written_ns);
-  for (const auto& l : truth.landmarks) {
-    const auto p = TransformPoint(common::Inverse(frame_g1_), l.pose.Translation());
-    tracks_ << fmt::format("{},world,truth_landmark,{},{:.4f},{:.4f}\n", step, l.id, p.x(), p.y());
-  }
   for (const auto& rt : truth.robots) {
     const auto robot = robots_.find(rt.id);
     if (robot == robots_.end()) continue;
@@ -109,7 +105,7 @@ void RunEvaluator::AddTruth(const common::GroundTruth& truth, std::int64_t writt
 
 void RunEvaluator::AddEstimate(const std::string& robot_id, const RobotEstimate& estimate) {
   RobotRun& robot = robots_.at(robot_id);
-  if (estimate.step < robot.next_step || robot.pending.count(estimate.step) > 0) return;
+  if (estimate.step < next_scored_step_ || robot.pending.count(estimate.step) > 0) return;
   robot.pending[estimate.step] = estimate;
   ++taken_;
   ++robot.estimates;
@@ -125,7 +121,7 @@ void RunEvaluator::AddEstimate(const std::string& robot_id, const RobotEstimate&
 void RunEvaluator::AddOdometry(const std::string& robot_id, const common::Odometry& odometry, std::int64_t written_ns) {
   RobotRun& robot = robots_.at(robot_id);
   const std::uint32_t step = odometry.stamp.step;
-  if (step < robot.next_step || !robot.odometry.emplace(step, odometry).second) return;
+  if (step < next_scored_step_ || !robot.odometry.emplace(step, odometry).second) return;
   ++taken_;
   ++robot.odometry_steps;
   robot.newest_odometry = std::max(robot.newest_odometry, step);
@@ -164,18 +160,9 @@ std::size_t RunEvaluator::Pending() const {
 void RunEvaluator::Advance(bool finishing) {
   if (!started_) return;
   WriteViewSteps(finishing);
-  for (auto& [id, robot] : robots_) ScoreSteps(id, &robot, finishing);
-  // The truth of a step is needed until it is shown and every robot has scored that step or
-  // passed it.
-  while (!truth_.empty()) {
-    const std::uint32_t step = truth_.begin()->first;
-    bool needed = step >= next_view_step_;
-    for (const auto& [id, robot] : robots_) {
-      needed = needed || robot.estimates == 0 || robot.newest_estimate < step || robot.pending.count(step) > 0;
-    }
-    if (needed && !finishing) break;
-    truth_.erase(truth_.begin());
-  }
+  ScoreSteps(finishing);
+  // The truth of a step is needed until the step is shown and scored.
+  while (!truth_.empty() && truth_.begin()->first < next_scored_step_) truth_.erase(truth_.begin());
 }
 
 void RunEvaluator::WriteViewSteps(bool finishing) {
@@ -212,21 +199,37 @@ void RunEvaluator::WriteViewSteps(bool finishing) {
   }
 }
 
-void RunEvaluator::ScoreSteps(const std::string& id, RobotRun* robot, bool finishing) {
-  while (!robot->pending.empty()) {
-    const auto it = robot->pending.begin();
-    const std::uint32_t step = it->first;
-    if (step >= next_view_step_ && !finishing) break;
-    const common::Odometry* odo = nullptr;
-    if (const auto o = robot->odometry.find(step); o != robot->odometry.end()) {
-      odo = &o->second;
-    } else if (step > 0 && !finishing && robot->newest_odometry <= step) {
-      break;  // the step's odometry is still to come
+void RunEvaluator::ScoreSteps(bool finishing) {
+  std::set<std::uint32_t> steps;  // held: the truth's and the robots' estimates'
+  for (const auto& [step, truth] : truth_) steps.insert(step);
+  for (const auto& [id, robot] : robots_) {
+    for (const auto& [step, e] : robot.pending) steps.insert(step);
+  }
+  // Step by step, each step's robots in order, so that the files' rows do not depend on the
+  // order in which the data arrived. Live, a step waits until it is shown and every robot that has
+  // an estimate of it has its odometry (or a later one).
+  for (const std::uint32_t step : steps) {
+    if (!finishing && step >= next_view_step_) return;
+    for (const auto& [id, robot] : robots_) {
+      const bool awaits_odometry =
+          step > 0 && robot.pending.count(step) > 0 && robot.odometry.count(step) == 0 && robot.newest_odometry <= step;
+      if (!finishing && awaits_odometry) return;
     }
-    ScoreStep(id, robot, it->second, odo);
-    robot->odometry.erase(robot->odometry.begin(), robot->odometry.upper_bound(step));
-    robot->pending.erase(it);
-    robot->next_step = step + 1;
+    if (const auto t = truth_.find(step); t != truth_.end()) {
+      for (const auto& l : t->second.landmarks) {
+        const auto p = TransformPoint(common::Inverse(frame_g1_), l.pose.Translation());
+        tracks_ << fmt::format("{},world,truth_landmark,{},{:.4f},{:.4f}\n", step, l.id, p.x(), p.y());
+      }
+    }
+    for (auto& [id, robot] : robots_) {
+      const auto it = robot.pending.find(step);
+      if (it == robot.pending.end()) continue;
+      const auto o = robot.odometry.find(step);
+      ScoreStep(id, &robot, it->second, o == robot.odometry.end() ? nullptr : &o->second);
+      robot.odometry.erase(robot.odometry.begin(), robot.odometry.upper_bound(step));
+      robot.pending.erase(it);
+    }
+    next_scored_step_ = step + 1;
   }
 }
 

@@ -31,9 +31,10 @@ struct FinalPose {
 // Scores a run as it goes: the per-step metrics (errors in each robot's own frame, through the
 // true frame pose) and the run summary of docs/metrics.md; writes metrics.csv, TUM
 // trajectories, tracks.csv (everything in the first robot's frame, for plots) and view.jsonl
-// (the run step by step for mrslam_view --run) step by step, and summary.json at the end. A
-// robot's step is scored once its truth and odometry are in (or later ones show they will not
-// come), a view step once every robot's estimate of it is in (or a later one); then they are let
+// (the run step by step for mrslam_view --run) step by step, and summary.json at the end. A step
+// is shown once its truth and every robot's estimate of it are in (or later ones show they will
+// not come), scored once shown and every robot's odometry of it is in (or a later one), robots in
+// order, so that the files do not depend on the order in which the data arrived; then it is let
 // go, so that the memory held does not grow with the run: per step only each robot's true pose in
 // its frame (for its final trajectory) and a few numbers. Pure: no DDS.
 class RunEvaluator {
@@ -74,7 +75,6 @@ class RunEvaluator {
     std::optional<RobotScorer> scorer;
     std::map<std::uint32_t, RobotEstimate> pending;      // received, not yet scored
     std::map<std::uint32_t, common::Odometry> odometry;  // received, not yet used
-    std::uint32_t next_step = 0;                         // every step before it is scored
     std::uint32_t newest_estimate = 0;                   // the newest step received
     std::uint32_t newest_odometry = 0;
     std::size_t estimates = 0, odometry_steps = 0;  // received
@@ -95,7 +95,7 @@ class RunEvaluator {
   // truth no one needs any more.
   void Advance(bool finishing);
   void WriteViewSteps(bool finishing);
-  void ScoreSteps(const std::string& id, RobotRun* robot, bool finishing);
+  void ScoreSteps(bool finishing);
   void ScoreStep(const std::string& id, RobotRun* robot, const RobotEstimate& est, const common::Odometry* odo);
   void WriteStep(const std::string& id, const RobotEstimate& estimate, const StepScore& score, RobotRun* robot);
   // The robot's summary entry; the union completeness over the robots whose frame it knows.
@@ -116,7 +116,8 @@ class RunEvaluator {
   std::map<std::uint32_t, common::GroundTruth> truth_;  // received, still needed
   std::size_t truth_steps_ = 0;                         // received
   std::uint32_t newest_truth_ = 0;
-  std::uint32_t next_view_step_ = 0;  // every step before it is shown
+  std::uint32_t next_view_step_ = 0;    // every step before it is shown
+  std::uint32_t next_scored_step_ = 0;  // every step before it is scored
   std::size_t taken_ = 0;
   DeliveryTiming timing_;
 };
