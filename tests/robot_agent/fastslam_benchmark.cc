@@ -5,6 +5,7 @@
 //  - BM_FullStep<D>: FastSlam::Process with 1000 particles, 50 landmarks in the map and about 10
 //    detections per step (landmarks on a ring of radius 10 m, the robot driving along it with a
 //    6 m lidar), for static (D = 2) and constant-turn-rate (D = 5) landmark states.
+//  - BM_Estimate<D>: FastSlam::Estimate on the same world, 1000 particles.
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -101,6 +102,24 @@ void BM_FullStepConstantTurnRate(benchmark::State& state) {
 }
 BENCHMARK(BM_FullStepStatic)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FullStepConstantTurnRate)->Unit(benchmark::kMillisecond);
+
+// FastSlam::Estimate (the reported map over all particles) after the world has moved on 64
+// steps past the first lap, as the agent calls it once per step.
+template <int D>
+void BM_Estimate(benchmark::State& state, robot_agent::LandmarkKinematics kinematics) {
+  const common::ScenarioOptions o = RingScenario(kinematics);
+  testing::TinyWorld world(o, 1);
+  FastSlam<D> filter(common::AgentOptionsFor(o, "r1"), 1);
+  for (int k = 0; k < 194; ++k) filter.Process(world.Step());
+  for (auto _ : state) benchmark::DoNotOptimize(filter.Estimate());
+  state.counters["landmarks"] = static_cast<double>(filter.Estimate().landmarks.size());
+}
+void BM_EstimateStatic(benchmark::State& state) { BM_Estimate<2>(state, robot_agent::LandmarkKinematics::kStatic); }
+void BM_EstimateConstantTurnRate(benchmark::State& state) {
+  BM_Estimate<5>(state, robot_agent::LandmarkKinematics::kConstantTurnRate);
+}
+BENCHMARK(BM_EstimateStatic)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EstimateConstantTurnRate)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace mrslam::robot_agent::filters
