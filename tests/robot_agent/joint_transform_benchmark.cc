@@ -32,6 +32,7 @@ void BM_JointSmoother(benchmark::State& state) {
   }
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
   std::vector<std::vector<common::SensorStep>> history;
+  history.reserve(steps);
   for (int k = 0; k < steps; ++k) history.push_back(source->Step());
   const std::vector<BatchSmoother::RobotStart> starts = {{o.robots[0].id, o.robots[0].initial_pose},
                                                          {o.robots[1].id, o.robots[1].initial_pose}};
