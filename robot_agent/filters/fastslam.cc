@@ -849,12 +849,16 @@ void FastSlam<D>::FusePeerLandmark(Particle* particle, int slot, const MapLandma
   Block* block = MutableBlock(particle, slot / kLanes);
   const int lane = slot % kLanes;
   const bool fuse_heading = peer_heading && !block->meta[lane].position_only;
-  const int m = fuse_heading ? 3 : 2;
-  Eigen::VectorXd x = block->MeanVector(lane);
-  Eigen::MatrixXd p = block->CovMatrix(lane);
-  if (FuseObservation(&x, &p, peer.mean.head(m), peer.covariance.topLeftCorner(m, m), rule, fuse_heading ? 2 : -1)) {
-    block->Set(lane, x, p);
+  StateVector<D> x = block->MeanVector(lane);
+  StateMatrix<D> p = block->CovMatrix(lane);
+  bool fused = false;
+  if constexpr (D > 2) {
+    if (fuse_heading) fused = FuseObservation<D, 3>(&x, &p, peer.mean, peer.covariance, rule, 2);
   }
+  if (!fuse_heading) {
+    fused = FuseObservation<D, 2>(&x, &p, peer.mean.head<2>(), peer.covariance.topLeftCorner<2, 2>(), rule);
+  }
+  if (fused) block->Set(lane, x, p);
   LandmarkMeta& meta = block->meta[lane];
   if (meta.landmark_id < 0) meta.landmark_id = peer.landmark_id;
 }

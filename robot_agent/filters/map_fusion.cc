@@ -6,7 +6,7 @@
 #include <tuple>
 
 #include <Eigen/Cholesky>
-#include <Eigen/LU>
+#include <Eigen/Eigenvalues>
 
 #include "common/angles.h"
 #include "common/se2.h"
@@ -38,106 +38,154 @@ MapLandmark TransformLandmark(const MapLandmark& in_peer, const common::Pose2& t
 
 namespace {
 
+template <int N>
+using Vec = Eigen::Matrix<double, N, 1>;
+template <int R, int C>
+using Mat = Eigen::Matrix<double, R, C>;
+
 // The gain-form update of FuseObservation with P0, R0 and K given; returns the fused covariance.
-Eigen::MatrixXd JosephCovariance(const Eigen::MatrixXd& p0, const Eigen::MatrixXd& r0, const Eigen::MatrixXd& k,
-                                 int m) {
-  const int n = static_cast<int>(p0.rows());
-  Eigen::MatrixXd ikh = Eigen::MatrixXd::Identity(n, n);
-  ikh.leftCols(m) -= k;
-  Eigen::MatrixXd p = ikh * p0 * ikh.transpose() + k * r0 * k.transpose();
+template <int N, int M>
+Mat<N, N> JosephCovariance(const Mat<N, N>& p0, const Mat<M, M>& r0, const Mat<N, M>& k) {
+  Mat<N, N> ikh = Mat<N, N>::Identity();
+  ikh.template leftCols<M>() -= k;
+  const Mat<N, N> p = ikh * p0 * ikh.transpose() + k * r0 * k.transpose();
   return 0.5 * (p + p.transpose());
 }
 
-// The Kalman gain K = P0 H^T (H P0 H^T + R0)^-1 for H = [I_m 0]; false if S is singular.
-bool KalmanGain(const Eigen::MatrixXd& p0, const Eigen::MatrixXd& r0, int m, Eigen::MatrixXd* k) {
-  const Eigen::MatrixXd s = p0.topLeftCorner(m, m) + r0;
-  const Eigen::LLT<Eigen::MatrixXd> llt(s);
+// The Kalman gain K = P0 H^T (H P0 H^T + R0)^-1 for H = [I_M 0]; false if S is singular.
+template <int N, int M>
+bool KalmanGain(const Mat<N, N>& p0, const Mat<M, M>& r0, Mat<N, M>* k) {
+  const Mat<M, M> s = p0.template topLeftCorner<M, M>() + r0;
+  const Eigen::LLT<Mat<M, M>> llt(s);
   if (llt.info() != Eigen::Success) return false;
   // K^T = S^-1 (P0 H^T)^T.
-  *k = llt.solve(p0.leftCols(m).transpose()).transpose();
+  *k = llt.solve(p0.template leftCols<M>().transpose()).transpose();
   return k->allFinite();
+}
+
+// g(omega) of CovarianceIntersectionWeight and its first two derivatives.
+template <int M>
+struct CiObjective {
+  Vec<M> lambda;
+  int extra;  // n - M
+  double Value(double omega) const {
+    double g = extra > 0 ? extra * std::log(omega) : 0.0;
+    for (int i = 0; i < M; ++i) g += std::log(lambda(i) + omega * (1.0 - lambda(i)));
+    return g;
+  }
+  double Slope(double omega) const {
+    double d = extra / omega;
+    for (int i = 0; i < M; ++i) d += (1.0 - lambda(i)) / (lambda(i) + omega * (1.0 - lambda(i)));
+    return d;
+  }
+  double Curvature(double omega) const {
+    double c = -extra / (omega * omega);
+    for (int i = 0; i < M; ++i) {
+      const double q = (1.0 - lambda(i)) / (lambda(i) + omega * (1.0 - lambda(i)));
+      c -= q * q;
+    }
+    return c;
+  }
+};
+
+// The root of the decreasing g' in (lo, hi), given g'(lo) > 0 > g'(hi): Newton steps, each kept
+// inside the bracket that the sign of g' maintains (else the bracket's midpoint).
+template <int M>
+double SlopeRoot(const CiObjective<M>& g, double lo, double hi) {
+  constexpr double kTolerance = 1e-12;
+  constexpr int kMaxIterations = 100;
+  double omega = 0.5 * (lo + hi);
+  for (int i = 0; i < kMaxIterations && hi - lo > kTolerance; ++i) {
+    const double slope = g.Slope(omega);
+    (slope > 0.0 ? lo : hi) = omega;
+    double next = omega - slope / g.Curvature(omega);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    const bool converged = std::abs(next - omega) <= kTolerance;
+    omega = next;
+    if (converged) break;
+  }
+  return omega;
 }
 
 }  // namespace
 
-bool FuseObservation(Eigen::VectorXd* x, Eigen::MatrixXd* p, const Eigen::VectorXd& z, const Eigen::MatrixXd& r,
-                     MapFusionRule rule, int angle_index) {
-  const int n = static_cast<int>(x->size());
-  const int m = static_cast<int>(z.size());
-  if (m < 1 || m > n || p->rows() != n || p->cols() != n || r.rows() != m || r.cols() != m) return false;
-  if (!x->allFinite() || !p->allFinite() || !z.allFinite() || !r.allFinite()) return false;
-  Eigen::VectorXd nu = z - x->head(m);
-  if (angle_index >= 0 && angle_index < m) nu(angle_index) = common::WrapAngle(nu(angle_index));
+template <int M>
+std::optional<double> CovarianceIntersectionWeight(const Mat<M, M>& p_mm, const Mat<M, M>& r, int n) {
+  const Eigen::LLT<Mat<M, M>> llt(r);
+  if (llt.info() != Eigen::Success || !p_mm.allFinite()) return std::nullopt;
+  const Mat<M, M> half = llt.matrixL().solve(p_mm);           // L^-1 p_mm
+  const Mat<M, M> c = llt.matrixL().solve(half.transpose());  // L^-1 p_mm L^-T
+  const Eigen::SelfAdjointEigenSolver<Mat<M, M>> es(0.5 * (c + c.transpose()), Eigen::EigenvaluesOnly);
+  if (es.info() != Eigen::Success || !(es.eigenvalues().minCoeff() > 0.0)) return std::nullopt;
+  const CiObjective<M> g{es.eigenvalues(), n - M};
+  constexpr double kLo = 1e-4, kHi = 1.0 - 1e-4;
+  double omega = kLo;
+  if (g.Slope(kHi) >= 0.0) {
+    omega = kHi;
+  } else if (g.Slope(kLo) > 0.0) {
+    omega = SlopeRoot(g, kLo, kHi);
+  }
+  const double fused = g.Value(omega);
+  const double keep = 0.0;  // g(1)
+  const double take = n == M ? g.Value(0.0) : -std::numeric_limits<double>::infinity();
+  if (keep >= fused && keep >= take) return 1.0;
+  if (take > fused) return 0.0;
+  return omega;
+}
 
-  Eigen::MatrixXd k, p_new;
+template <int N, int M>
+bool FuseObservation(Vec<N>* x, Mat<N, N>* p, const Vec<M>& z, const Mat<M, M>& r, MapFusionRule rule,
+                     int angle_index) {
+  static_assert(M >= 1 && M <= N, "the observed components are the state's first M");
+  if (!x->allFinite() || !p->allFinite() || !z.allFinite() || !r.allFinite()) return false;
+  Vec<M> nu = z - x->template head<M>();
+  if (angle_index >= 0 && angle_index < M) nu(angle_index) = common::WrapAngle(nu(angle_index));
+
+  Mat<N, M> k = Mat<N, M>::Zero();
+  Mat<N, N> p_new = *p;
   switch (rule) {
     case MapFusionRule::kAverage: {
-      k = Eigen::MatrixXd::Zero(n, m);
-      k.topRows(m) = 0.5 * Eigen::MatrixXd::Identity(m, m);
-      p_new = JosephCovariance(*p, r, k, m);
+      k.template topRows<M>() = 0.5 * Mat<M, M>::Identity();
+      p_new = JosephCovariance<N, M>(*p, r, k);
       break;
     }
     case MapFusionRule::kWeighted: {
-      if (!KalmanGain(*p, r, m, &k)) return false;
-      p_new = JosephCovariance(*p, r, k, m);
+      if (!KalmanGain<N, M>(*p, r, &k)) return false;
+      p_new = JosephCovariance<N, M>(*p, r, k);
       break;
     }
     case MapFusionRule::kCovarianceIntersection: {
-      // Golden-section search of omega minimizing log det P(omega) (convex in omega).
-      const auto fused = [&](double omega, Eigen::MatrixXd* gain, Eigen::MatrixXd* cov) {
-        const Eigen::MatrixXd p0 = *p / omega;
-        const Eigen::MatrixXd r0 = r / (1.0 - omega);
-        if (!KalmanGain(p0, r0, m, gain)) return std::numeric_limits<double>::infinity();
-        *cov = JosephCovariance(p0, r0, *gain, m);
-        const Eigen::LLT<Eigen::MatrixXd> llt(*cov);
-        if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
-        return 2.0 * llt.matrixLLT().diagonal().array().log().sum();
-      };
-      constexpr double kInvPhi = 0.6180339887498949;
-      double a = 1e-4, b = 1.0 - 1e-4;
-      double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
-      Eigen::MatrixXd gk, gp;
-      double fc = fused(c, &gk, &gp), fd = fused(d, &gk, &gp);
-      for (int i = 0; i < 50; ++i) {
-        if (fc < fd) {
-          b = d;
-          d = c;
-          fd = fc;
-          c = b - kInvPhi * (b - a);
-          fc = fused(c, &gk, &gp);
-        } else {
-          a = c;
-          c = d;
-          fc = fd;
-          d = a + kInvPhi * (b - a);
-          fd = fused(d, &gk, &gp);
+      const std::optional<double> omega = CovarianceIntersectionWeight<M>(p->template topLeftCorner<M, M>(), r, N);
+      if (!omega) return false;
+      if (*omega == 1.0) return true;  // keep the own estimate: unchanged
+      if constexpr (N == M) {
+        if (*omega == 0.0) {  // take the incoming one
+          k.setIdentity();
+          p_new = r;
+          break;
         }
       }
-      const double log_det = fused(0.5 * (a + b), &k, &p_new);
-      if (!std::isfinite(log_det)) return false;
-      // The end points omega = 1 (keep the own estimate) and, for a full-state observation,
-      // omega = 0 (take the incoming one) lie outside the searched interval.
-      const auto log_det_of = [](const Eigen::MatrixXd& cov) {
-        const Eigen::LLT<Eigen::MatrixXd> llt(cov);
-        return llt.info() == Eigen::Success ? 2.0 * llt.matrixLLT().diagonal().array().log().sum()
-                                            : std::numeric_limits<double>::infinity();
-      };
-      const double keep = log_det_of(*p);
-      const double take = m == n ? log_det_of(r) : std::numeric_limits<double>::infinity();
-      if (keep <= log_det && keep <= take) return true;  // unchanged
-      if (take < log_det) {
-        k = Eigen::MatrixXd::Identity(n, n);
-        p_new = r;
-      }
+      const Mat<N, N> p0 = *p / *omega;
+      const Mat<M, M> r0 = r / (1.0 - *omega);
+      if (!KalmanGain<N, M>(p0, r0, &k)) return false;
+      p_new = JosephCovariance<N, M>(p0, r0, k);
       break;
     }
   }
   if (!p_new.allFinite()) return false;
   *x += k * nu;
-  if (angle_index >= 0 && angle_index < n) (*x)(angle_index) = common::WrapAngle((*x)(angle_index));
+  if (angle_index >= 0 && angle_index < N) (*x)(angle_index) = common::WrapAngle((*x)(angle_index));
   *p = p_new;
   return true;
 }
+
+template std::optional<double> CovarianceIntersectionWeight<2>(const Mat<2, 2>&, const Mat<2, 2>&, int);
+template std::optional<double> CovarianceIntersectionWeight<3>(const Mat<3, 3>&, const Mat<3, 3>&, int);
+template bool FuseObservation<2, 2>(Vec<2>*, Mat<2, 2>*, const Vec<2>&, const Mat<2, 2>&, MapFusionRule, int);
+template bool FuseObservation<3, 2>(Vec<3>*, Mat<3, 3>*, const Vec<2>&, const Mat<2, 2>&, MapFusionRule, int);
+template bool FuseObservation<3, 3>(Vec<3>*, Mat<3, 3>*, const Vec<3>&, const Mat<3, 3>&, MapFusionRule, int);
+template bool FuseObservation<5, 2>(Vec<5>*, Mat<5, 5>*, const Vec<2>&, const Mat<2, 2>&, MapFusionRule, int);
+template bool FuseObservation<5, 3>(Vec<5>*, Mat<5, 5>*, const Vec<3>&, const Mat<3, 3>&, MapFusionRule, int);
 
 std::int64_t OriginKey(int origin_robot, std::uint32_t origin_track) {
   return origin_robot < 0 ? -1 : (static_cast<std::int64_t>(origin_robot) << 32) | origin_track;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -31,20 +32,25 @@ Eigen::Vector3d Minus(const Pose2& a, const Pose2& b) {
 
 }  // namespace
 
-// Appends the rows of one whitened residual block: r (size n) and its Jacobian blocks
-// (n x 3 each, zeros kept: the pattern depends on the structure only) for the variables at the
-// given column offsets (-1: a known quantity, no column).
+// Appends the rows of one whitened residual block: r (size N) and its Jacobian blocks
+// (N x 3 each, zeros kept: the pattern depends on the structure only) for the variables at the
+// given column offsets (-1: a known quantity, no column). Without Jacobian (a cost evaluation),
+// the residuals only. Fixed sizes: nothing is allocated per block.
 struct BatchSmoother::Rows {
+  bool with_jacobian = true;
   std::vector<Eigen::Triplet<double>> jacobian;
   std::vector<double> residual;
 
-  void Add(const Eigen::VectorXd& r, const std::vector<std::pair<int, Eigen::MatrixXd>>& blocks) {
+  template <int N>
+  void Add(const Eigen::Matrix<double, N, 1>& r,
+           std::initializer_list<std::pair<int, Eigen::Matrix<double, N, 3>>> blocks) {
     const int row = static_cast<int>(residual.size());
-    for (int i = 0; i < r.size(); ++i) residual.push_back(r(i));
+    for (int i = 0; i < N; ++i) residual.push_back(r(i));
+    if (!with_jacobian) return;
     for (const auto& [col, j] : blocks) {
       if (col < 0) continue;
-      for (int i = 0; i < j.rows(); ++i) {
-        for (int c = 0; c < j.cols(); ++c) {
+      for (int i = 0; i < N; ++i) {
+        for (int c = 0; c < 3; ++c) {
           jacobian.emplace_back(row + i, col + c, j(i, c));
         }
       }
@@ -215,21 +221,20 @@ void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
         }
         jc = -(robot_w.asDiagonal() * common::ComposeJacobianRight(previous, increment) * jc);
       }
-      rows->Add(res, {{layout.RobotCol(ri, t), Eigen::MatrixXd(robot_w.asDiagonal())},
-                      {layout.RobotCol(ri, t - 1), jf},
-                      {layout.CorrectionCol(ri), jc}});
+      rows->Add<3>(res, {{layout.RobotCol(ri, t), Eigen::Matrix3d(robot_w.asDiagonal())},
+                         {layout.RobotCol(ri, t - 1), jf},
+                         {layout.CorrectionCol(ri), jc}});
     }
     if (estimate_calibration_) {
-      rows->Add(correction_w.asDiagonal() * (correction_prior - robot.correction),
-                {{layout.CorrectionCol(ri), -Eigen::MatrixXd(correction_w.asDiagonal())}});
+      rows->Add<3>(correction_w.asDiagonal() * (correction_prior - robot.correction),
+                   {{layout.CorrectionCol(ri), -Eigen::Matrix3d(correction_w.asDiagonal())}});
     }
   }
   for (const auto& [id, chain] : chains_) {
     const int base = layout.chain_col.at(id);
     // A weak prior on the first heading keeps it defined before it is observable.
-    Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(1, 3);
-    prior(0, 2) = 1e-3;
-    rows->Add(Eigen::VectorXd::Zero(1), {{base, prior}});
+    const Eigen::RowVector3d prior(0.0, 0.0, 1e-3);
+    rows->Add<1>(Eigen::Matrix<double, 1, 1>::Zero(), {{base, prior}});
     // A unicycle step is a composition with a fixed increment (a static landmark has one state).
     const Pose2 increment = StepLandmark(Pose2{}, chain.kinematics);
     const Eigen::Vector3d& w = landmark_w;
@@ -238,7 +243,7 @@ void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
       const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], common::Compose(previous, increment));
       const Eigen::Matrix3d jf = -(w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
       const int col = base + 3 * static_cast<int>(i);
-      rows->Add(res, {{col, Eigen::MatrixXd(w.asDiagonal())}, {col - 3, jf}});
+      rows->Add<3>(res, {{col, Eigen::Matrix3d(w.asDiagonal())}, {col - 3, jf}});
     }
   }
   for (const Reading& z : readings_) {
@@ -250,10 +255,10 @@ void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
                                : layout.RobotCol(z.seen, z.step);
     const Eigen::Vector2d res = WhitenedResidual(z);
     // Jacobians of the residual (z - h): -dh.
-    const Eigen::MatrixXd jx = -filters::MeasurementJacobianPose(p, x);
-    Eigen::MatrixXd jp = Eigen::MatrixXd::Zero(2, 3);
+    const Eigen::Matrix<double, 2, 3> jx = -filters::MeasurementJacobianPose(p, x);
+    Eigen::Matrix<double, 2, 3> jp = Eigen::Matrix<double, 2, 3>::Zero();
     jp.leftCols<2>() = -filters::MeasurementJacobianLandmark(p, x);
-    rows->Add(res, {{layout.RobotCol(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
+    rows->Add<2>(res, {{layout.RobotCol(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
   }
 }
 
@@ -309,6 +314,7 @@ void BatchSmoother::SolveOnce() {
     if (solver.info() != Eigen::Success || !delta.allFinite()) break;
     apply(delta, 1.0);
     Rows after_rows;
+    after_rows.with_jacobian = false;  // the cost only
     BuildRows(layout, &after_rows);
     const double after = cost(after_rows);
     if (after > before) {

@@ -46,9 +46,9 @@ class FakeFilter : public filters::SlamFilter {
         continue;
       }
       filters::MapLandmark& l = estimate.landmarks[match[i]];
-      Eigen::VectorXd x = l.mean.head<2>();
-      Eigen::MatrixXd p = l.covariance.topLeftCorner<2, 2>();
-      filters::FuseObservation(&x, &p, in[i].mean.head<2>(), in[i].covariance.topLeftCorner<2, 2>(), rule);
+      Eigen::Vector2d x = l.mean.head<2>();
+      Eigen::Matrix2d p = l.covariance.topLeftCorner<2, 2>();
+      filters::FuseObservation<2, 2>(&x, &p, in[i].mean.head<2>(), in[i].covariance.topLeftCorner<2, 2>(), rule);
       l.mean.head<2>() = x;
       l.covariance.topLeftCorner<2, 2>() = p;
     }

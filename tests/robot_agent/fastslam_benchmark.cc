@@ -5,8 +5,12 @@
 //  - BM_FullStep<D>: FastSlam::Process with 1000 particles, 50 landmarks in the map and about 10
 //    detections per step (landmarks on a ring of radius 10 m, the robot driving along it with a
 //    6 m lidar), for static (D = 2) and constant-turn-rate (D = 5) landmark states.
+//  - BM_Estimate<D>: FastSlam::Estimate on the same world, 1000 particles.
+//  - BM_MergeLandmarks<D>: merging a peer's map into a 300-particle filter on the same world.
 #include <cmath>
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -15,6 +19,7 @@
 #include "common/rng.h"
 #include "robot_agent/filters/fastslam.h"
 #include "robot_agent/filters/landmark_ekf.h"
+#include "robot_agent/filters/map_fusion.h"
 #include "tests/robot_agent/tiny_world.h"
 
 namespace mrslam::robot_agent::filters {
@@ -54,8 +59,8 @@ void BM_LandmarkUpdates(benchmark::State& state) {
 }
 BENCHMARK(BM_LandmarkUpdates)->ArgsProduct({{100, 1000, 10000}, {2, 50, 500}})->Unit(benchmark::kMillisecond);
 
-common::ScenarioOptions RingScenario(robot_agent::LandmarkKinematics kinematics) {
-  common::ScenarioOptions o = testing::OneRobotScenario(1.0, 0.1, 1000);
+common::ScenarioOptions RingScenario(robot_agent::LandmarkKinematics kinematics, int particles) {
+  common::ScenarioOptions o = testing::OneRobotScenario(1.0, 0.1, particles);
   o.run.dt_s = 0.5;
   o.robots[0].initial_pose = {10.0, 0.0, common::kPi / 2};
   o.sensors.lidar.max_range_m = 6.0;
@@ -67,13 +72,27 @@ common::ScenarioOptions RingScenario(robot_agent::LandmarkKinematics kinematics)
   return o;
 }
 
+// The ring world and a filter of the given seed that has driven `steps` steps in it (one lap,
+// 126 steps, maps every landmark).
+template <int D>
+struct RingRun {
+  RingRun(robot_agent::LandmarkKinematics kinematics, int particles, int steps, std::uint64_t filter_seed)
+      : options(RingScenario(kinematics, particles)),
+        world(options, 1),
+        filter(common::AgentOptionsFor(options, "r1"), filter_seed) {
+    for (int k = 0; k < steps; ++k) filter.Process(world.Step());
+  }
+  common::ScenarioOptions options;
+  testing::TinyWorld world;
+  FastSlam<D> filter;
+};
+
 template <int D>
 void BM_FullStep(benchmark::State& state, robot_agent::LandmarkKinematics kinematics) {
-  const common::ScenarioOptions o = RingScenario(kinematics);
-  testing::TinyWorld world(o, 1);
-  FastSlam<D> filter(common::AgentOptionsFor(o, "r1"), 1);
-  // One lap (126 steps) maps every landmark; then the steps to time are prepared in advance.
-  for (int k = 0; k < 130; ++k) filter.Process(world.Step());
+  // One lap maps every landmark; then the steps to time are prepared in advance.
+  RingRun<D> run(kinematics, 1000, 130, 1);
+  testing::TinyWorld& world = run.world;
+  FastSlam<D>& filter = run.filter;
   std::vector<common::SensorStep> steps;
   double detections = 0.0;
   for (int k = 0; k < 64; ++k) {
@@ -101,6 +120,57 @@ void BM_FullStepConstantTurnRate(benchmark::State& state) {
 }
 BENCHMARK(BM_FullStepStatic)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FullStepConstantTurnRate)->Unit(benchmark::kMillisecond);
+
+// FastSlam::Estimate (the reported map over all particles) after the world has moved on 64
+// steps past the first lap, as the agent calls it once per step.
+template <int D>
+void BM_Estimate(benchmark::State& state, robot_agent::LandmarkKinematics kinematics) {
+  const RingRun<D> run(kinematics, 1000, 194, 1);
+  for (auto _ : state) benchmark::DoNotOptimize(run.filter.Estimate());
+  state.counters["landmarks"] = static_cast<double>(run.filter.Estimate().landmarks.size());
+}
+void BM_EstimateStatic(benchmark::State& state) { BM_Estimate<2>(state, robot_agent::LandmarkKinematics::kStatic); }
+void BM_EstimateConstantTurnRate(benchmark::State& state) {
+  BM_Estimate<5>(state, robot_agent::LandmarkKinematics::kConstantTurnRate);
+}
+BENCHMARK(BM_EstimateStatic)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EstimateConstantTurnRate)->Unit(benchmark::kMillisecond);
+
+// FastSlam::MergeLandmarks of a peer's map (its reported estimate, about 50 landmarks, moved into
+// the own frame through an uncertain transform) into a filter of 300 particles that has mapped
+// the same 50 landmarks (no reported identities: matching by Mahalanobis distance), by
+// covariance intersection. The filter is copied before each merge, untimed; its blocks stay
+// shared between the copy and the original, as after resampling, so the merge pays its
+// copy-on-write copies.
+template <int D>
+void BM_MergeLandmarks(benchmark::State& state, robot_agent::LandmarkKinematics kinematics) {
+  // Two filters of 300 particles over the same 140 steps of the ring world.
+  const RingRun<D> own_run(kinematics, 300, 140, 1), peer_run(kinematics, 300, 140, 2);
+  const FastSlam<D>& own = own_run.filter;
+  const Eigen::Matrix3d t_covariance = Eigen::Vector3d(0.01, 0.01, 0.0004).asDiagonal();
+  std::vector<MapLandmark> incoming;
+  for (const MapLandmark& l : peer_run.filter.Estimate().landmarks) {
+    incoming.push_back(TransformLandmark(l, common::Pose2{}, t_covariance));
+  }
+  std::optional<FastSlam<D>> merged;
+  for (auto _ : state) {
+    state.PauseTiming();
+    merged.emplace(own);
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(
+        merged->MergeLandmarks(incoming, robot_agent::MapFusionRule::kCovarianceIntersection, 0.999, 0.5));
+  }
+  state.counters["own_landmarks"] = own.ParticleLandmarkCount(0);
+  state.counters["peer_landmarks"] = static_cast<double>(incoming.size());
+}
+void BM_MergeLandmarksStatic(benchmark::State& state) {
+  BM_MergeLandmarks<2>(state, robot_agent::LandmarkKinematics::kStatic);
+}
+void BM_MergeLandmarksConstantTurnRate(benchmark::State& state) {
+  BM_MergeLandmarks<5>(state, robot_agent::LandmarkKinematics::kConstantTurnRate);
+}
+BENCHMARK(BM_MergeLandmarksStatic)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MergeLandmarksConstantTurnRate)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace mrslam::robot_agent::filters

@@ -1,6 +1,8 @@
 #include "robot_agent/filters/map_fusion.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include <gtest/gtest.h>
 #include <Eigen/Cholesky>
@@ -75,16 +77,15 @@ TEST(TransformLandmark, ExactAndConsistent) {
 TEST(FuseObservation, WeightedIsInformationFusion) {
   common::Rng rng(11, "weighted");
   for (int trial = 0; trial < 200; ++trial) {
-    const Eigen::MatrixXd pa = RandomSpd(&rng, 3, 0.01, 1.0), pb = RandomSpd(&rng, 3, 0.01, 1.0);
-    Eigen::VectorXd xa(3), xb(3);
-    xa << rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1);
-    xb << rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1);
-    Eigen::VectorXd x = xa;
-    Eigen::MatrixXd p = pa;
-    ASSERT_TRUE(FuseObservation(&x, &p, xb, pb, MapFusionRule::kWeighted));
-    const Eigen::MatrixXd info = pa.inverse() + pb.inverse();
-    const Eigen::MatrixXd p_expected = info.inverse();
-    const Eigen::VectorXd x_expected = p_expected * (pa.inverse() * xa + pb.inverse() * xb);
+    const Eigen::Matrix3d pa = RandomSpd(&rng, 3, 0.01, 1.0), pb = RandomSpd(&rng, 3, 0.01, 1.0);
+    const Eigen::Vector3d xa(rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1));
+    const Eigen::Vector3d xb(rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1));
+    Eigen::Vector3d x = xa;
+    Eigen::Matrix3d p = pa;
+    ASSERT_TRUE((FuseObservation<3, 3>(&x, &p, xb, pb, MapFusionRule::kWeighted)));
+    const Eigen::Matrix3d info = pa.inverse() + pb.inverse();
+    const Eigen::Matrix3d p_expected = info.inverse();
+    const Eigen::Vector3d x_expected = p_expected * (pa.inverse() * xa + pb.inverse() * xb);
     EXPECT_LT((p - p_expected).norm(), 1e-9);
     EXPECT_LT((x - x_expected).norm(), 1e-9);
   }
@@ -97,10 +98,10 @@ TEST(FuseObservation, FusedCovarianceNoLargerThanInputs) {
   common::Rng rng(12, "no_larger");
   for (const MapFusionRule rule : {MapFusionRule::kWeighted, MapFusionRule::kCovarianceIntersection}) {
     for (int trial = 0; trial < 300; ++trial) {
-      const Eigen::MatrixXd pa = RandomSpd(&rng, 3, 0.01, 1.0), pb = RandomSpd(&rng, 3, 0.01, 1.0);
-      Eigen::VectorXd x = Eigen::VectorXd::Zero(3);
-      Eigen::MatrixXd p = pa;
-      ASSERT_TRUE(FuseObservation(&x, &p, Eigen::VectorXd::Ones(3), pb, rule));
+      const Eigen::Matrix3d pa = RandomSpd(&rng, 3, 0.01, 1.0), pb = RandomSpd(&rng, 3, 0.01, 1.0);
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      Eigen::Matrix3d p = pa;
+      ASSERT_TRUE((FuseObservation<3, 3>(&x, &p, Eigen::Vector3d::Ones(), pb, rule)));
       if (rule == MapFusionRule::kWeighted) {
         EXPECT_TRUE(NoLarger(p, pa)) << "trial " << trial;
         EXPECT_TRUE(NoLarger(p, pb)) << "trial " << trial;
@@ -117,11 +118,12 @@ TEST(FuseObservation, FusedCovarianceNoLargerThanInputs) {
 TEST(FuseObservation, CovarianceIntersectionIsNeverTighterThanInformationFusion) {
   common::Rng rng(14, "ci_vs_info");
   for (int trial = 0; trial < 300; ++trial) {
-    const Eigen::MatrixXd pa = RandomSpd(&rng, 2, 0.01, 1.0), pb = RandomSpd(&rng, 2, 0.01, 1.0);
-    Eigen::VectorXd x1 = Eigen::VectorXd::Zero(2), x2 = x1;
-    Eigen::MatrixXd p_ci = pa, p_info = pa;
-    ASSERT_TRUE(FuseObservation(&x1, &p_ci, Eigen::VectorXd::Ones(2), pb, MapFusionRule::kCovarianceIntersection));
-    ASSERT_TRUE(FuseObservation(&x2, &p_info, Eigen::VectorXd::Ones(2), pb, MapFusionRule::kWeighted));
+    const Eigen::Matrix2d pa = RandomSpd(&rng, 2, 0.01, 1.0), pb = RandomSpd(&rng, 2, 0.01, 1.0);
+    Eigen::Vector2d x1 = Eigen::Vector2d::Zero(), x2 = x1;
+    Eigen::Matrix2d p_ci = pa, p_info = pa;
+    ASSERT_TRUE(
+        (FuseObservation<2, 2>(&x1, &p_ci, Eigen::Vector2d::Ones(), pb, MapFusionRule::kCovarianceIntersection)));
+    ASSERT_TRUE((FuseObservation<2, 2>(&x2, &p_info, Eigen::Vector2d::Ones(), pb, MapFusionRule::kWeighted)));
     EXPECT_TRUE(NoLarger(p_info, p_ci)) << "trial " << trial;
   }
 }
@@ -135,14 +137,14 @@ TEST(FuseObservation, CovarianceIntersectionConsistentForCorrelatedInputs) {
   const Eigen::MatrixXd own_a = RandomSpd(&rng, 2, 0.05, 0.2), own_b = RandomSpd(&rng, 2, 0.05, 0.2);
   double nees_ci = 0.0, nees_weighted = 0.0;
   for (int trial = 0; trial < kTrials; ++trial) {
-    const Eigen::VectorXd common_error = Sample(&rng, shared);
-    const Eigen::VectorXd xa = common_error + Sample(&rng, own_a);
-    const Eigen::VectorXd xb = common_error + Sample(&rng, own_b);
+    const Eigen::Vector2d common_error = Sample(&rng, shared);
+    const Eigen::Vector2d xa = common_error + Sample(&rng, own_a);
+    const Eigen::Vector2d xb = common_error + Sample(&rng, own_b);
     // Each input's own covariance is right: shared + own.
     for (const MapFusionRule rule : {MapFusionRule::kCovarianceIntersection, MapFusionRule::kWeighted}) {
-      Eigen::VectorXd x = xa;
-      Eigen::MatrixXd p = shared + own_a;
-      ASSERT_TRUE(FuseObservation(&x, &p, xb, shared + own_b, rule));
+      Eigen::Vector2d x = xa;
+      Eigen::Matrix2d p = shared + own_a;
+      ASSERT_TRUE((FuseObservation<2, 2>(&x, &p, xb, Eigen::Matrix2d(shared + own_b), rule)));
       const double nees = x.dot(p.ldlt().solve(x));  // the truth is 0
       (rule == MapFusionRule::kWeighted ? nees_weighted : nees_ci) += nees;
     }
@@ -151,14 +153,87 @@ TEST(FuseObservation, CovarianceIntersectionConsistentForCorrelatedInputs) {
   EXPECT_GT(nees_weighted / kTrials, 2.0 * 1.3);  // overconfident, as expected
 }
 
+// Covariance intersection written out plainly, as a reference: information form
+//   P(omega)^-1 = omega P^-1 + (1 - omega) H^T r^-1 H,  P(omega)^-1 x' = omega P^-1 x + (1 - omega) H^T r^-1 z,
+// omega by a golden-section search of log det P(omega) over [1e-4, 1 - 1e-4] run until the
+// bracket stops shrinking, then the end points omega = 1 and (full observation) omega = 0.
+struct Fused {
+  Eigen::VectorXd x;
+  Eigen::MatrixXd p;
+};
+Fused ReferenceCovarianceIntersection(const Eigen::VectorXd& x, const Eigen::MatrixXd& p, const Eigen::VectorXd& z,
+                                      const Eigen::MatrixXd& r) {
+  const int n = static_cast<int>(x.size()), m = static_cast<int>(z.size());
+  const Eigen::MatrixXd h = Eigen::MatrixXd::Identity(m, n);
+  const Eigen::MatrixXd a = p.inverse(), b = h.transpose() * r.inverse() * h;
+  const auto log_det_p = [&](double w) { return -std::log((w * a + (1.0 - w) * b).determinant()); };
+  constexpr double kInvPhi = 0.6180339887498949;
+  double lo = 1e-4, hi = 1.0 - 1e-4;
+  for (int i = 0; i < 200; ++i) {
+    const double c = hi - kInvPhi * (hi - lo), d = lo + kInvPhi * (hi - lo);
+    if (log_det_p(c) < log_det_p(d)) {
+      hi = d;
+    } else {
+      lo = c;
+    }
+  }
+  double omega = 0.5 * (lo + hi);
+  if (std::log(p.determinant()) <= log_det_p(omega)) omega = 1.0;
+  if (m == n && std::log(r.determinant()) < std::min(log_det_p(omega), std::log(p.determinant()))) omega = 0.0;
+  if (omega == 0.0) return {z, r};
+  const Eigen::MatrixXd info = omega * a + (1.0 - omega) * b;
+  const Eigen::MatrixXd p_new = info.inverse();
+  return {p_new * (omega * a * x + (1.0 - omega) * h.transpose() * r.inverse() * z), p_new};
+}
+
+// The closed-form weight against the reference on random inputs, the own and the incoming
+// covariance each up to 30 times larger than the other (so that keeping the own estimate, taking
+// the incoming one and every weight between occur). Tolerance: the golden-section search sees
+// log det P only to round-off (1e-16 relative), and log det P is flat at its minimum (a change
+// d omega moves it by g'' d omega^2 / 2), so the reference's omega is good to about 1e-8; the
+// fused state moves with omega by dP/d omega = -P (P^-1 - H^T r^-1 H) P, a few times P here, so
+// both agree to 1e-6 relative.
+template <int N, int M>
+void ExpectCovarianceIntersectionMatchesReference(std::uint64_t seed) {
+  common::Rng rng(seed, "ci_reference");
+  int keep = 0, take = 0;
+  for (int trial = 0; trial < 500; ++trial) {
+    const double scale = std::exp(rng.Uniform(-std::log(30.0), std::log(30.0)));
+    const Eigen::Matrix<double, N, N> p = RandomSpd(&rng, N, 0.05, 1.0);
+    const Eigen::Matrix<double, M, M> r = RandomSpd(&rng, M, 0.05, 1.0) * scale;
+    Eigen::Matrix<double, N, 1> x;
+    Eigen::Matrix<double, M, 1> z;
+    for (int i = 0; i < N; ++i) x(i) = rng.Uniform(-1, 1);
+    for (int i = 0; i < M; ++i) z(i) = rng.Uniform(-1, 1);
+    const Fused expected = ReferenceCovarianceIntersection(x, p, z, r);
+    Eigen::Matrix<double, N, 1> x_fast = x;
+    Eigen::Matrix<double, N, N> p_fast = p;
+    ASSERT_TRUE((FuseObservation<N, M>(&x_fast, &p_fast, z, r, MapFusionRule::kCovarianceIntersection)));
+    EXPECT_LT((x_fast - expected.x).norm(), 1e-6 * (1.0 + expected.x.norm())) << "trial " << trial;
+    EXPECT_LT((p_fast - expected.p).norm(), 1e-6 * expected.p.norm()) << "trial " << trial;
+    keep += p_fast == p ? 1 : 0;
+    take += M == N && p_fast.template topLeftCorner<M, M>() == r ? 1 : 0;
+  }
+  EXPECT_GT(keep, 0);
+  if (M == N) {
+    EXPECT_GT(take, 0);
+  }
+}
+
+TEST(FuseObservation, CovarianceIntersectionMatchesTheReference) {
+  ExpectCovarianceIntersectionMatchesReference<2, 2>(21);
+  ExpectCovarianceIntersectionMatchesReference<3, 2>(22);
+  ExpectCovarianceIntersectionMatchesReference<3, 3>(23);
+  ExpectCovarianceIntersectionMatchesReference<5, 2>(24);
+  ExpectCovarianceIntersectionMatchesReference<5, 3>(25);
+}
+
 TEST(FuseObservation, AverageIsTheMidpointAndPartialObservationLeavesTheRest) {
-  Eigen::VectorXd x(3);
-  x << 1.0, 2.0, 3.0;
-  Eigen::MatrixXd p = Eigen::MatrixXd::Identity(3, 3) * 0.5;
-  Eigen::VectorXd z(2);
-  z << 3.0, 0.0;
-  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(2, 2) * 0.1;
-  ASSERT_TRUE(FuseObservation(&x, &p, z, r, MapFusionRule::kAverage));
+  Eigen::Vector3d x(1.0, 2.0, 3.0);
+  Eigen::Matrix3d p = Eigen::Matrix3d::Identity() * 0.5;
+  const Eigen::Vector2d z(3.0, 0.0);
+  const Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * 0.1;
+  ASSERT_TRUE((FuseObservation<3, 2>(&x, &p, z, r, MapFusionRule::kAverage)));
   EXPECT_DOUBLE_EQ(x(0), 2.0);
   EXPECT_DOUBLE_EQ(x(1), 1.0);
   EXPECT_DOUBLE_EQ(x(2), 3.0);
@@ -167,23 +242,25 @@ TEST(FuseObservation, AverageIsTheMidpointAndPartialObservationLeavesTheRest) {
 }
 
 TEST(FuseObservation, WrapsTheAngleComponent) {
-  Eigen::VectorXd x(3);
-  x << 0.0, 0.0, common::kPi - 0.05;
-  Eigen::MatrixXd p = Eigen::MatrixXd::Identity(3, 3) * 0.01;
-  Eigen::VectorXd z(3);
-  z << 0.0, 0.0, -common::kPi + 0.05;
-  ASSERT_TRUE(FuseObservation(&x, &p, z, p, MapFusionRule::kWeighted, 2));
+  Eigen::Vector3d x(0.0, 0.0, common::kPi - 0.05);
+  Eigen::Matrix3d p = Eigen::Matrix3d::Identity() * 0.01;
+  const Eigen::Vector3d z(0.0, 0.0, -common::kPi + 0.05);
+  ASSERT_TRUE((FuseObservation<3, 3>(&x, &p, z, Eigen::Matrix3d(p), MapFusionRule::kWeighted, 2)));
   EXPECT_NEAR(std::abs(x(2)), common::kPi, 1e-9);
 }
 
 TEST(FuseObservation, RejectsUnusableInput) {
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
-  Eigen::MatrixXd p = Eigen::MatrixXd::Identity(2, 2);
-  Eigen::VectorXd z(2);
-  z << std::nan(""), 0.0;
-  EXPECT_FALSE(FuseObservation(&x, &p, z, p, MapFusionRule::kCovarianceIntersection));
-  EXPECT_EQ(x, Eigen::VectorXd::Zero(2));
-  EXPECT_FALSE(FuseObservation(&x, &p, Eigen::VectorXd::Zero(3), p, MapFusionRule::kWeighted));
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d p = Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d z(std::nan(""), 0.0);
+  EXPECT_FALSE((FuseObservation<2, 2>(&x, &p, z, Eigen::Matrix2d(p), MapFusionRule::kCovarianceIntersection)));
+  EXPECT_EQ(x, Eigen::Vector2d::Zero());
+  // An incoming covariance that is not positive definite.
+  const Eigen::Matrix2d indefinite = Eigen::Vector2d(1.0, -1.0).asDiagonal();
+  for (const MapFusionRule rule : {MapFusionRule::kWeighted, MapFusionRule::kCovarianceIntersection}) {
+    EXPECT_FALSE((FuseObservation<2, 2>(&x, &p, Eigen::Vector2d::Zero(), indefinite, rule)));
+  }
+  EXPECT_EQ(p, Eigen::Matrix2d::Identity());
 }
 
 TEST(MatchLandmarks, GatesByMahalanobisAndIdentity) {
