@@ -241,7 +241,7 @@ void Cooperation::Receive(const PeerInbox& inbox, filters::SlamFilter* filter) {
     // Stale: older than the last applied from that sender; a second one of the same step is a
     // duplicate.
     if (peer.last_measurement_step && m.header.step <= *peer.last_measurement_step) {
-      Reject();
+      RejectStale();
       continue;
     }
     peer.last_measurement_step = m.header.step;
@@ -263,7 +263,7 @@ void Cooperation::Receive(const PeerInbox& inbox, filters::SlamFilter* filter) {
     const auto it = peers_.find(m.header.sender);
     if (it == peers_.end() || !it->second.transform ||
         (it->second.last_snapshot_step && m.header.step < *it->second.last_snapshot_step)) {
-      Reject();  // the sender's frame is unknown, or stale
+      RejectStale();  // the sender's frame is not known yet, or stale
       continue;
     }
     it->second.last_snapshot_step = m.header.step;
@@ -274,9 +274,12 @@ void Cooperation::Receive(const PeerInbox& inbox, filters::SlamFilter* filter) {
   //    the filter drops the landmark it gates to (filters that track motion ignore notices).
   for (const auto& n : inbox.moved) {
     PeerState* peer = HeaderValid(n.header) ? &peers_[n.header.sender] : nullptr;
-    if (peer == nullptr || !n.position_in_sender.allFinite() || !peer->transform ||
-        (peer->last_notice_step && n.header.step < *peer->last_notice_step)) {
+    if (peer == nullptr || !n.position_in_sender.allFinite()) {
       Reject();
+      continue;
+    }
+    if (!peer->transform || (peer->last_notice_step && n.header.step < *peer->last_notice_step)) {
+      RejectStale();  // the sender's frame is not known yet, or stale
       continue;
     }
     peer->last_notice_step = n.header.step;

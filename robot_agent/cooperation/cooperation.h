@@ -52,7 +52,12 @@ class Cooperation {
   const std::vector<RendezvousEvent>& rendezvous() const;
   std::vector<FrameTransform> known_transforms() const;
   std::vector<std::string> frames_known() const;
+  // Peer messages rejected so far: malformed ones and, among them counted apart, those only out of
+  // order (stale_messages: older than one already applied from the sender, or a snapshot or
+  // notice from a peer whose frame is not known yet, as happens in realtime when a message
+  // overtakes the detections that make the rendezvous).
   int rejected_messages() const;
+  int stale_messages() const { return stale_; }
   // Every transform estimated jointly from both robots' histories (cooperation.joint_transform),
   // in order: the peer, the snapshot's step, the estimate.
   const std::vector<FrameTransform>& joint_estimates() const { return joint_estimates_; }
@@ -140,6 +145,10 @@ class Cooperation {
   // The snapshot for peer: the transforms held (but the peer's own), and the map if with_map.
   MapSnapshot MakeSnapshot(const std::string& peer, const filters::FilterEstimate& estimate, bool with_map) const;
   void Reject() { ++rejected_; }
+  void RejectStale() {
+    ++rejected_;
+    ++stale_;
+  }
 
   AgentOptions options_;
   std::string robot_id_;
@@ -150,6 +159,7 @@ class Cooperation {
   std::uint32_t last_step_ = 0;  // of the last AfterStep
   bool any_step_ = false;
   int rejected_ = 0;
+  int stale_ = 0;
   int moved_notices_ = 0;
   int cooperative_updates_ = 0;
   std::vector<FrameTransform> joint_estimates_;

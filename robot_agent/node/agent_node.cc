@@ -363,11 +363,20 @@ struct AgentNode::Impl {
     if (auto it = inbox.find(k - 1); it != inbox.end()) {
       SortBySender(&it->second);
       const int before = cooperation.rejected_messages();
+      const int stale_before = cooperation.stale_messages();
       const std::size_t joint_before = cooperation.joint_estimates().size();
       cooperation.Receive(it->second, filter.get());
-      if (const int bad = cooperation.rejected_messages() - before; bad > 0) {
+      const int stale = cooperation.stale_messages() - stale_before;
+      if (const int bad = cooperation.rejected_messages() - before - stale; bad > 0) {
         Reject(cooperation::Rejection::kMalformed, fmt::format("{} peer message(s) of step {}", bad, k - 1),
                static_cast<std::uint32_t>(bad));
+      }
+      if (stale > 0) {
+        Reject(cooperation::Rejection::kStale,
+               fmt::format("{} peer message(s) of step {} out of order (older than one applied, or from a peer "
+                           "whose frame is not known yet)",
+                           stale, k - 1),
+               static_cast<std::uint32_t>(stale));
       }
       for (std::size_t i = joint_before; i < cooperation.joint_estimates().size(); ++i) {
         const auto& t = cooperation.joint_estimates()[i];

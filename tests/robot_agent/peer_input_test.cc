@@ -38,16 +38,19 @@ class HostileInput : public ::testing::Test {
     m.sender_covariance = Eigen::Matrix3d::Identity() * 1e-3;
     return m;
   }
-  // Applies the inbox; expects it rejected (one count per message) with the map unchanged.
-  void ExpectRejected(const PeerInbox& inbox) {
+  // Applies the inbox; expects it rejected (one count per message, `stale` of them as only out of
+  // order) with the map unchanged.
+  void ExpectRejected(const PeerInbox& inbox, int stale = 0) {
     Cooperation& a = sim_.agent(0);
     const int before = a.rejected_messages();
+    const int stale_before = a.stale_messages();
     const auto landmarks = sim_.filter(0).estimate.landmarks;
     const int merges = sim_.filter(0).merges;
     const auto frames = a.frames_known();
     a.Receive(inbox, &sim_.filter(0));
     EXPECT_EQ(a.rejected_messages(),
               before + static_cast<int>(inbox.measurements.size() + inbox.maps.size() + inbox.moved.size()));
+    EXPECT_EQ(a.stale_messages(), stale_before + stale);
     EXPECT_EQ(sim_.filter(0).merges, merges);
     EXPECT_EQ(sim_.filter(0).estimate.landmarks.size(), landmarks.size());
     EXPECT_EQ(a.frames_known(), frames);
@@ -200,14 +203,14 @@ TEST_F(HostileInput, StaleAndFutureSteps) {
   MapSnapshot b = GoodSnapshot();
   b.header.step = sim_.step() + 100;
   RelativeMeasurement m = GoodMeasurement();
-  m.header.step = 14;  // r2's measurements up to step 15 were applied
-  ExpectRejected({{m}, {a, b}, {}});
+  m.header.step = 14;                    // r2's measurements up to step 15 were applied
+  ExpectRejected({{m}, {a, b}, {}}, 2);  // a and m only out of order; b from the future
 }
 
 TEST_F(HostileInput, SnapshotFromAPeerWhoseFrameIsUnknown) {
   MapSnapshot a = GoodSnapshot();
   a.header.sender = "r3";
-  ExpectRejected({{}, {a}, {}});
+  ExpectRejected({{}, {a}, {}}, 1);  // a team member not met yet: out of order, not malformed
 }
 
 TEST_F(HostileInput, MovedNoticesAreValidatedAndCounted) {
@@ -222,7 +225,7 @@ TEST_F(HostileInput, MovedNoticesAreValidatedAndCounted) {
   EXPECT_EQ(sim_.agent(0).moved_notices(), 1);
   LandmarkMovedNotice unknown_frame = good;
   unknown_frame.header.sender = "r3";
-  ExpectRejected({{}, {}, {unknown_frame}});
+  ExpectRejected({{}, {}, {unknown_frame}}, 1);
 }
 
 TEST_F(HostileInput, MovedNoticeReachesTheFilterInTheOwnFrame) {
