@@ -165,13 +165,17 @@ void RunEvaluator::Advance(bool finishing) {
   while (!truth_.empty() && truth_.begin()->first < next_scored_step_) truth_.erase(truth_.begin());
 }
 
-void RunEvaluator::WriteViewSteps(bool finishing) {
-  std::set<std::uint32_t> steps;  // finishing: every step still held
+std::set<std::uint32_t> RunEvaluator::HeldSteps() const {
+  std::set<std::uint32_t> steps;
   for (const auto& [step, truth] : truth_) steps.insert(step);
   for (const auto& [id, robot] : robots_) {
     for (const auto& [step, e] : robot.pending) steps.insert(step);
   }
-  for (const std::uint32_t step : steps) {
+  return steps;
+}
+
+void RunEvaluator::WriteViewSteps(bool finishing) {
+  for (const std::uint32_t step : HeldSteps()) {
     if (step < next_view_step_) continue;
     // Live, a step is shown once its truth is in (or a later one) and every robot's estimate
     // of it (or a later one): what is missing then will not come.
@@ -200,15 +204,10 @@ void RunEvaluator::WriteViewSteps(bool finishing) {
 }
 
 void RunEvaluator::ScoreSteps(bool finishing) {
-  std::set<std::uint32_t> steps;  // held: the truth's and the robots' estimates'
-  for (const auto& [step, truth] : truth_) steps.insert(step);
-  for (const auto& [id, robot] : robots_) {
-    for (const auto& [step, e] : robot.pending) steps.insert(step);
-  }
   // Step by step, each step's robots in order, so that the files' rows do not depend on the
   // order in which the data arrived. Live, a step waits until it is shown and every robot that has
   // an estimate of it has its odometry (or a later one).
-  for (const std::uint32_t step : steps) {
+  for (const std::uint32_t step : HeldSteps()) {
     if (!finishing && step >= next_view_step_) return;
     for (const auto& [id, robot] : robots_) {
       const bool awaits_odometry =

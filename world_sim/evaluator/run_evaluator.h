@@ -94,6 +94,8 @@ class RunEvaluator {
   // Shows and scores whatever is complete (finishing: everything held), then lets go of the
   // truth no one needs any more.
   void Advance(bool finishing);
+  // The steps held: those of the truth and of the robots' estimates not yet scored.
+  std::set<std::uint32_t> HeldSteps() const;
   void WriteViewSteps(bool finishing);
   void ScoreSteps(bool finishing);
   void ScoreStep(const std::string& id, RobotRun* robot, const RobotEstimate& est, const common::Odometry* odo);
@@ -111,7 +113,6 @@ class RunEvaluator {
   std::ofstream metrics_, tracks_, view_;
   bool started_ = false;
   common::Pose2 frame_g1_;  // tracks are in G1
-  std::map<std::string, common::Pose2> frames_;
   std::map<std::string, RobotRun> robots_;
   std::map<std::uint32_t, common::GroundTruth> truth_;  // received, still needed
   std::size_t truth_steps_ = 0;                         // received
