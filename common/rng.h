@@ -2,10 +2,14 @@
 
 #include <cstdint>
 #include <random>
+#include <sstream>
+#include <string>
 #include <string_view>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+
+#include "common/archive.h"
 
 namespace mrslam::common {
 
@@ -48,6 +52,22 @@ class Rng {
     return ldlt.transpositionsP().transpose() * y;
   }
   std::mt19937_64& engine() { return engine_; }
+
+  // The engine's and the normal distribution's state (the standard library's exact text form).
+  void Io(Archive& ar) {
+    std::string text;
+    if (!ar.loading()) {
+      std::ostringstream out;
+      out << engine_ << ' ' << normal_;
+      text = out.str();
+    }
+    ar(text);
+    if (ar.loading()) {
+      std::istringstream in(text);
+      in >> engine_ >> normal_;
+      if (!in) throw ArchiveError("archive: a random stream's state does not read back");
+    }
+  }
 
  private:
   std::mt19937_64 engine_;

@@ -23,6 +23,7 @@ struct AgentFlags {
   int particles = -1;
   int estimate_readers = 0;
   bool allow_rejected = false;
+  std::string snapshot_dir;
 };
 
 void AddFlags(CLI::App& app, AgentFlags* flags) {
@@ -37,6 +38,16 @@ void AddFlags(CLI::App& app, AgentFlags* flags) {
       ->check(CLI::Range(0, 1000));
   app.add_flag("--allow-rejected", flags->allow_rejected,
                "End normally even after malformed, foreign-writer, contested or beyond-horizon input");
+  app.add_option("--snapshot-dir", flags->snapshot_dir,
+                 "Write the agent's state to DIR/<robot>.snapshot every run.snapshot_every_steps steps and, started "
+                 "again in the same run, go on from it");
+}
+
+// What a snapshot must have been written by: the same scenario, seed, robot, estimator and domain.
+std::string RunFingerprint(const common::ScenarioOptions& scenario, const AgentOptions& agent, int domain) {
+  return "scenario '" + scenario.name + "' seed " + std::to_string(scenario.seed) + " robot " + agent.robot_id +
+         " filter " + agent.filter.type + " steps " + std::to_string(scenario.run.steps) + " domain " +
+         std::to_string(domain);
 }
 
 int Run(AgentFlags flags) {
@@ -61,6 +72,10 @@ int Run(AgentFlags flags) {
   options.horizon_steps = static_cast<std::uint32_t>(scenario.run.horizon_steps);
   options.allow_rejected = flags.allow_rejected;
   options.security_dir = flags.common.security_dir;
+  options.history_steps = scenario.run.history_steps;
+  options.snapshot_dir = flags.snapshot_dir;
+  options.snapshot_every_steps = static_cast<std::uint32_t>(scenario.run.snapshot_every_steps);
+  options.run_fingerprint = RunFingerprint(scenario, agent, options.domain);
   const auto& stop = common::InstallStopHandler();
   AgentNode node(agent, options, std::move(slam));
   return node.Run(stop) ? 0 : 130;

@@ -7,7 +7,12 @@
 # The victim is killed once the launcher's progress shows a step drawn at random in the first 90%
 # of the run (the progress is printed every 2 s, so the kill comes up to about 2 s later; the
 # launcher says after which step the agent died).
+# With --realtime FACTOR both runs are in realtime mode at that factor: the numbers cannot be
+# identical, so a seed passes instead when the victim is back at the newest step within 2 s of its
+# restart and its position RMSE from 50 steps after it is back to the end is within 2x the
+# uninterrupted run's over the same steps.
 # Usage: scripts/restart_check.sh [--seeds N] [--scenario FILE] [--out DIR] [--shm] [--draw SEED]
+#                                 [--realtime FACTOR]
 set -euo pipefail
 
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -16,6 +21,7 @@ seeds=20
 scenario=$root/config/swarm_8.yaml
 out=$root/runs/restart-check
 shm=()
+mode=()
 draw=1
 while [[ $# -gt 0 ]]; do
   case $1 in
@@ -24,6 +30,7 @@ while [[ $# -gt 0 ]]; do
     --out) out=$2; shift 2 ;;
     --shm) shm=(--shm); shift ;;
     --draw) draw=$2; shift 2 ;;
+    --realtime) mode=(--set run.mode=realtime --set "run.realtime_factor=$2"); shift 2 ;;
     *) echo "restart_check.sh: error: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -38,13 +45,26 @@ numbers() {
   "$python" - "$1" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
-for k in ("wall_seconds", "evaluator_wall_seconds", "dds_domain", "cpu_seconds", "cpu_cores_mean"):
+for k in ("wall_seconds", "evaluator_wall_seconds", "dds_domain", "cpu_seconds", "cpu_cores_mean", "peak_rss_mib"):
     s.pop(k, None)
 for r in s["robots"].values():
     for k in ("step_cpu_ms_median", "step_cpu_ms_p99", "latency_us_median", "latency_us_p99", "restarts",
               "restart_comeback_s"):
         r.pop(k, None)
 print(json.dumps(s, sort_keys=True))
+PY
+}
+
+# Realtime: the victim's position RMSE over the steps from 50 after the step it was back at ($3)
+# to the end, in the restarted run's metrics ($1) over the uninterrupted run's ($2).
+error_ratio() {
+  "$python" - "$1" "$2" "$3" "$4" <<'PY'
+import csv, math, sys
+def rmse(path, robot, first):
+    e = [float(r["position_err_m"]) for r in csv.DictReader(open(path)) if r["robot"] == robot and int(r["step"]) >= first]
+    return math.sqrt(sum(x * x for x in e) / len(e)) if e else float("nan")
+again, plain, back, robot = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+print("%.2f" % (rmse(again, robot, back + 50) / rmse(plain, robot, back + 50)))
 PY
 }
 
@@ -74,7 +94,10 @@ wait_for_step() {
 }
 
 failures=0
-printf 'seed robot drawn_step killed_after_step completed identical restarts comeback_s shm_left\n' | tee "$out/table.txt"
+check=identical
+[[ ${#mode[@]} -gt 0 ]] && check=error_ratio
+printf 'seed robot drawn_step killed_after_step completed %s restarts comeback_s shm_left\n' "$check" |
+  tee "$out/table.txt"
 for ((seed = 1; seed <= seeds; ++seed)); do
   victim=${robots[$((RANDOM % ${#robots[@]}))]}
   drawn=$((1 + RANDOM % (steps * 9 / 10)))
@@ -82,10 +105,10 @@ for ((seed = 1; seed <= seeds; ++seed)); do
   again=$out/restart/seed-$seed
   rm -rf "$plain" "$again"
   mkdir -p "$plain" "$again"
-  "$bin/mrslam_launch" --scenario "$scenario" --seed "$seed" --out "$plain" --no-plots "${shm[@]}" \
+  "$bin/mrslam_launch" --scenario "$scenario" --seed "$seed" --out "$plain" --no-plots "${shm[@]}" "${mode[@]}" \
     >"$plain/launch.log" 2>&1 || { echo "seed $seed: the uninterrupted run failed ($plain/launch.log)" >&2; exit 1; }
   "$bin/mrslam_launch" --scenario "$scenario" --seed "$seed" --out "$again" --no-plots --restart 1 "${shm[@]}" \
-    >"$again/launch.log" 2>&1 &
+    "${mode[@]}" >"$again/launch.log" 2>&1 &
   launcher=$!
   pid=""
   if wait_for_step "$launcher" "$drawn" "$again/launch.log"; then
@@ -102,7 +125,11 @@ for ((seed = 1; seed <= seeds; ++seed)); do
   identical=no
   restarts=-
   comeback=-
-  if [[ $completed == yes ]]; then
+  back=$(grep -o 'is back at step [0-9]*' "$again/launch.log" | head -1 | grep -o '[0-9]*$' || true)
+  if [[ $completed == yes && $check == error_ratio ]]; then
+    identical=-
+    [[ -n $back ]] && identical=$(error_ratio "$again/metrics.csv" "$plain/metrics.csv" "$back" "$victim")
+  elif [[ $completed == yes ]]; then
     if [[ $(numbers "$plain/summary.json") == "$(numbers "$again/summary.json")" ]] &&
       cmp -s "$plain/metrics.csv" "$again/metrics.csv"; then identical=yes; fi
     read -r restarts comeback < <("$python" -c "import json,sys; r = json.load(open(sys.argv[1]))['robots'][sys.argv[2]]
@@ -112,7 +139,14 @@ print(r['restarts'], ','.join('%.2f' % s for s in r['restart_comeback_s']) or '-
   printf '%s %s %s %s %s %s %s %s %s\n' "$seed" "$victim" "$drawn" "$step" "$completed" "$identical" "$restarts" \
     "$comeback" "$after" |
     tee -a "$out/table.txt"
-  if [[ $completed != yes || $identical != yes || $restarts != 1 || $comeback == - || $after != 0 || -z $pid ]]; then
+  passed=yes
+  if [[ $check == error_ratio ]]; then
+    "$python" -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 2.0 and float(sys.argv[2]) <= 2.0 else 1)" \
+      "${identical/-/nan}" "${comeback/-/nan}" 2>/dev/null || passed=no
+  elif [[ $identical != yes ]]; then
+    passed=no
+  fi
+  if [[ $passed != yes || $completed != yes || $restarts != 1 || $comeback == - || $after != 0 || -z $pid ]]; then
     failures=$((failures + 1))
   fi
 done

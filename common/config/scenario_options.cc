@@ -254,6 +254,8 @@ void ParseRun(Section& top, ScenarioOptions* o) {
   }
   o->run.ack_timeout_s = run.Get("ack_timeout_s", o->run.ack_timeout_s);
   o->run.horizon_steps = run.Get("horizon_steps", o->run.horizon_steps);
+  o->run.snapshot_every_steps = run.Get("snapshot_every_steps", o->run.snapshot_every_steps);
+  o->run.history_steps = run.Get("history_steps", o->run.history_steps);
   o->run.domain = run.Get("domain", o->run.domain);
   run.RejectUnknownKeys();
 }
@@ -606,6 +608,12 @@ void CheckRun(const ScenarioOptions& o, Checker* c) {
   c->Check(run.ack_timeout_s > 0.0, "run.ack_timeout_s", run.ack_timeout_s, "must be positive");
   c->Check(run.horizon_steps >= 1 && run.horizon_steps <= 1000000, "run.horizon_steps", run.horizon_steps,
            "must be in 1..1000000");
+  c->Check(run.snapshot_every_steps >= 1 && run.snapshot_every_steps <= 100000, "run.snapshot_every_steps",
+           run.snapshot_every_steps, "must be in 1..100000");
+  c->Check(run.history_steps > run.snapshot_every_steps && run.history_steps <= 1000000, "run.history_steps",
+           run.history_steps,
+           "must exceed run.snapshot_every_steps (a restarted agent takes the steps since its snapshot from the "
+           "history) and be at most 1000000");
   c->Check(run.domain >= 0 && run.domain <= 232, "run.domain", run.domain, "must be in 0..232");
   c->Check(!robots.empty(), "robots", "[]", "at least one robot is required");
   c->Check(robots.size() <= kMaxRobots, "robots", robots.size(), "at most 64 robots (one process each)");

@@ -33,7 +33,11 @@ struct RunOptions {
   double dt_s = 0.1;
   double ack_timeout_s = 30.0;  // lockstep: an agent silent this long aborts the run
   int horizon_steps = 1000;     // an agent rejects samples and peer messages further ahead
-  int domain = 0;               // DDS domain id
+  // A restarted agent restores its snapshot, written every snapshot_every_steps steps, and takes
+  // the steps since from DDS, which keeps history_steps steps of every stream.
+  int snapshot_every_steps = 50;
+  int history_steps = 200;
+  int domain = 0;  // DDS domain id
 };
 
 enum class LandmarkMotionModel { kStatic, kUnicycle, kCardinal, kConstantVelocity };

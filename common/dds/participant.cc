@@ -1,5 +1,6 @@
 #include "common/dds/participant.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <mutex>
@@ -66,7 +67,7 @@ void Secure(const ParticipantOptions& options, fdds::DomainParticipantQos* qos) 
 
 }  // namespace
 
-Participant::Participant(const ParticipantOptions& options) {
+Participant::Participant(const ParticipantOptions& options) : history_steps_(options.history_steps) {
   LoadProfilesOnce();
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   fdds::DomainParticipantQos qos;
@@ -106,6 +107,37 @@ fdds::Topic* Participant::GetTopic(const std::string& name, const fdds::TypeSupp
   if (topic == nullptr) throw DdsError("cannot create DDS topic '" + name + "'");
   topics_[name] = topic;
   return topic;
+}
+
+namespace {
+
+// A history of depth samples (KEEP_LAST), its resource limits to match.
+template <typename Qos>
+void SetDepth(int depth, Qos* qos) {
+  qos->history().depth = depth;
+  qos->resource_limits().max_samples = depth;
+  qos->resource_limits().max_samples_per_instance = depth;
+  qos->resource_limits().allocated_samples = std::min(qos->resource_limits().allocated_samples, depth);
+}
+
+}  // namespace
+
+fdds::DataWriterQos Participant::WriterQos(History history) const {
+  fdds::DataWriterQos qos;
+  if (publisher_->get_datawriter_qos_from_profile(kWriterProfile, qos) != ReturnCode_t::RETCODE_OK) {
+    throw DdsError(std::string("DDS writer profile '") + kWriterProfile + "' missing from " + ProfilesPath());
+  }
+  if (history == History::kRecent && history_steps_ > 0) SetDepth(history_steps_, &qos);
+  return qos;
+}
+
+fdds::DataReaderQos Participant::ReaderQos(History history) const {
+  fdds::DataReaderQos qos;
+  if (subscriber_->get_datareader_qos_from_profile(kReaderProfile, qos) != ReturnCode_t::RETCODE_OK) {
+    throw DdsError(std::string("DDS reader profile '") + kReaderProfile + "' missing from " + ProfilesPath());
+  }
+  if (history == History::kRecent && history_steps_ > 0) SetDepth(history_steps_, &qos);
+  return qos;
 }
 
 std::string LidarTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/lidar"; }

@@ -51,7 +51,15 @@ struct ParticipantOptions {
   // process identity (world_sim, evaluator, monitor or a robot id) whose files to use.
   std::string security_dir{};
   std::string identity{};
+  // The history depth of the streams it writes and reads (History::kRecent): the samples each
+  // keeps for a reader that joins late (a restarted process), and so the memory of the DDS layer.
+  // 0: the profiles' depth (which covers a whole run).
+  int history_steps = 0;
 };
+
+// How much of a stream DDS keeps: the participant's history_steps, or (a stream written once at
+// the end, e.g. a final trajectory in chunks) the profiles' whole-run depth.
+enum class History { kRecent, kWhole };
 
 // Owns one DomainParticipant, its publisher, subscriber and topics; deletes everything it
 // created on destruction. With a security folder, checks the identity's files first (one-line
@@ -71,11 +79,16 @@ class Participant {
   // Registers PubSubType once per type name and returns the topic (created once per name).
   eprosima::fastdds::dds::Topic* GetTopic(const std::string& name, const eprosima::fastdds::dds::TypeSupport& type);
 
+  // The profiles' writer and reader QoS with the history depth `history` asks for.
+  eprosima::fastdds::dds::DataWriterQos WriterQos(History history) const;
+  eprosima::fastdds::dds::DataReaderQos ReaderQos(History history) const;
+
  private:
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
+  int history_steps_ = 0;
 };
 
 constexpr char kWriterProfile[] = "mrslam_stream_writer";
@@ -86,9 +99,10 @@ template <typename PubSubType>
 class Writer {
  public:
   using Msg = typename PubSubType::type;
-  Writer(Participant& participant, const std::string& topic) : participant_(participant) {
+  Writer(Participant& participant, const std::string& topic, History history = History::kRecent)
+      : participant_(participant) {
     auto* t = participant.GetTopic(topic, eprosima::fastdds::dds::TypeSupport(new PubSubType()));
-    writer_ = participant.publisher()->create_datawriter_with_profile(t, kWriterProfile);
+    writer_ = participant.publisher()->create_datawriter(t, participant.WriterQos(history));
     if (writer_ == nullptr) throw DdsError("cannot create a writer on topic '" + topic + "'");
   }
   ~Writer() { participant_.publisher()->delete_datawriter(writer_); }
@@ -151,11 +165,12 @@ template <typename PubSubType>
 class Reader : public eprosima::fastdds::dds::DataReaderListener {
  public:
   using Msg = typename PubSubType::type;
-  Reader(Participant& participant, const std::string& topic, Notifier* notifier = nullptr)
+  Reader(Participant& participant, const std::string& topic, Notifier* notifier = nullptr,
+         History history = History::kRecent)
       : participant_(participant), notifier_(notifier) {
     auto* t = participant.GetTopic(topic, eprosima::fastdds::dds::TypeSupport(new PubSubType()));
-    reader_ = participant.subscriber()->create_datareader_with_profile(
-        t, kReaderProfile, this, eprosima::fastdds::dds::StatusMask::data_available());
+    reader_ = participant.subscriber()->create_datareader(t, participant.ReaderQos(history), this,
+                                                          eprosima::fastdds::dds::StatusMask::data_available());
     if (reader_ == nullptr) throw DdsError("cannot create a reader on topic '" + topic + "'");
   }
   ~Reader() override {

@@ -66,6 +66,14 @@ class Cooperation {
   // Mutual detections used to correct the own pose (cooperative localization).
   int cooperative_updates() const { return cooperative_updates_; }
 
+  // Writes or reads back what changes as the agent runs: per peer its transform, detections and
+  // encounter, the rendezvous, the counters, the own history (what the options fix is not
+  // written).
+  void Io(common::Archive& ar) {
+    ar(peers_, rendezvous_, last_step_, any_step_, rejected_, stale_, moved_notices_, cooperative_updates_,
+       joint_estimates_, first_pose_, history_, history_usable_);
+  }
+
  private:
   // The own detection of a peer at a step, with the own pose estimate of that step.
   struct OwnDetection {
@@ -73,6 +81,8 @@ class Cooperation {
     double bearing_rad = 0.0;
     common::Pose2 pose;
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+
+    void Io(common::Archive& ar) { ar(range_m, bearing_rad, pose, covariance); }
   };
   static constexpr std::uint32_t kEncounterRefineSteps = 10;
 
@@ -97,6 +107,12 @@ class Cooperation {
     bool transforms_due = false;  // the transforms only (an encounter that is not a rendezvous)
     // The last step applied per message kind (older ones are stale).
     std::optional<std::uint32_t> last_measurement_step, last_snapshot_step, last_notice_step;
+
+    void Io(common::Archive& ar) {
+      ar(transform, met, last_detection_outlier, transform_step, own_detections, peer_measurements, in_encounter,
+         encounter_first, encounter_last, encounter_pairs, event_index, last_rendezvous_step, snapshot_due,
+         transforms_due, last_measurement_step, last_snapshot_step, last_notice_step);
+    }
   };
 
   // Checks the parts every message shares: from a known other robot, to this one, not from a

@@ -6,7 +6,9 @@
 
 #include <Eigen/Core>
 
+#include "common/archive.h"
 #include "common/se2.h"
+#include "common/sensor_archive.h"
 #include "common/sensor_types.h"
 #include "robot_agent/filters/slam_filter.h"
 
@@ -79,5 +81,20 @@ struct RendezvousEvent {
   common::Pose2 t_self_peer;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
 };
+
+// The messages in an Archive (a snapshot of what an agent received but has not applied yet).
+inline void Io(common::Archive& ar, PeerHeader& h) { ar(h.sender, h.recipient, h.step, h.time_s, h.sequence); }
+inline void Io(common::Archive& ar, RelativeMeasurement& m) {
+  ar(m.header, m.has_range, m.range_m, m.bearing_rad, m.sender_pose, m.sender_covariance);
+}
+inline void Io(common::Archive& ar, FrameTransform& t) { ar(t.peer, t.step, t.t_self_peer, t.covariance); }
+inline void Io(common::Archive& ar, MapSnapshot& m) {
+  ar(m.header, m.landmarks, m.known_transforms, m.first_pose, m.history);
+}
+inline void Io(common::Archive& ar, LandmarkMovedNotice& n) {
+  ar(n.header, n.track_id, n.landmark_id, n.position_in_sender);
+}
+inline void Io(common::Archive& ar, PeerOutbox& o) { ar(o.measurements, o.maps, o.moved); }
+inline void Io(common::Archive& ar, RendezvousEvent& e) { ar(e.peer, e.step, e.t_self_peer, e.covariance); }
 
 }  // namespace mrslam::robot_agent::cooperation

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 
+#include "common/archive.h"
 #include "common/se2.h"
 
 // The maths of a rendezvous (docs/design.md "Frames", docs/cooperation.md; Zhou & Roumeliotis 2006): the
@@ -34,6 +35,8 @@ struct TransformEstimate {
   Eigen::Matrix3d dependent = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d independent = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d Covariance() const { return dependent + independent; }
+
+  void Io(common::Archive& ar) { ar(t, dependent, independent); }
 };
 
 // Robot j's pose in robot i's body frame from a mutual detection (docs/cooperation.md):

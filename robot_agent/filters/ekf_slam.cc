@@ -519,6 +519,11 @@ void EkfSlam::Process(const common::SensorStep& step) {
   ManageMap(detections, &association, moving);
 }
 
+void EkfSlam::Io(common::Archive& ar) {
+  ar(x_, p_, slots_, moved_, restarts_, step_, time_s_, next_track_id_, matched_observations_, flagged_observations_,
+     creep_flags_);
+}
+
 FilterEstimate EkfSlam::Estimate() const {
   FilterEstimate e;
   e.step = step_;

@@ -73,6 +73,7 @@ class EkfSlam : public SlamFilter {
 
   void Process(const common::SensorStep& step) override;
   FilterEstimate Estimate() const override;
+  void Io(common::Archive& ar) override;
   // Each incoming landmark is matched to the mapped ones (MatchLandmarks); a match is fused into
   // the joint state as a position observation z = m_in, H = [0 .. I .. 0], with the gain of the
   // rule (weighted: Kalman gain with R = C_in; covariance intersection: the Kalman gain with
@@ -130,6 +131,11 @@ class EkfSlam : public SlamFilter {
     // from each frame's predicted pose.
     std::vector<TimedSighting> probation_sightings;
     std::vector<TimedSighting> innovations;  // a map landmark's last position innovations
+
+    void Io(common::Archive& ar) {
+      ar(track_id, landmark_id, origin_robot, origin_track, first_seen_step, last_seen_step, misses, moving,
+         stay_frames, corrections, outside_frames, probation_sightings, innovations);
+    }
   };
   struct Detection {
     double range_m = 0.0;

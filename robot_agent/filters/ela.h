@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 
+#include "common/archive.h"
+
 // Paper B's "expected landmark area" (ELA) test (Badalkhani & Havangi 2021, section 3.3, with
 // the reading of docs/models.md): which of the mapped landmarks observed in one frame moved?
 namespace mrslam::robot_agent::filters {
@@ -70,6 +72,8 @@ struct TimedSighting {
   double time_s = 0.0;
   Eigen::Vector2d point = Eigen::Vector2d::Zero();
   Eigen::Matrix2d cov = Eigen::Matrix2d::Identity();
+
+  void Io(common::Archive& ar) { ar(time_s, point, cov); }
 };
 
 // Did a landmark stand still over its sightings? The weighted least-squares line p_k = a + v t_k,

@@ -86,6 +86,9 @@ class FastSlam : public SlamFilter {
 
   void Process(const common::SensorStep& step) override;
   FilterEstimate Estimate() const override;
+  // The particles (poses, speeds, maps: each landmark block once, shared as it was), weights,
+  // random stream, calibration, track counter and the last step's estimate and labels.
+  void Io(common::Archive& ar) override;
   // Map merging (SlamFilter): per particle, incoming landmarks are matched to the particle's
   // (MatchLandmarks: identities or provenance, else Mahalanobis on position); a match is fused by rule
   // (FuseObservation on position, plus heading when both have one); the others are added to
@@ -177,6 +180,7 @@ class FastSlam : public SlamFilter {
   // Step 6 for one particle.
   void CountMisses(int p);
   void Resample(const std::vector<double>& weights);
+  void IoParticles(common::Archive& ar);
   void EstimatePose(const std::vector<double>& weights);
   // The map of the estimate: every track held by more than half of the weight.
   std::vector<MapLandmark> MapEstimate() const;

@@ -3,6 +3,7 @@
 #include <deque>
 #include <vector>
 
+#include "common/archive.h"
 #include "common/sensor_types.h"
 #include "robot_agent/options/agent_options.h"
 
@@ -25,6 +26,8 @@ class OdometryCalibration {
   // interval: the calibrated commands of that interval, or with a lag those of [time_s - dt -
   // lag, time_s - lag), zero velocity where none was issued. Never empty.
   std::vector<Motion> Step(const common::Odometry& odometry, double time_s, double step_dt_s);
+
+  void Io(common::Archive& ar) { ar(scale_, turn_scale_, lag_s_, pending_); }
 
  private:
   double scale_, turn_scale_, lag_s_;

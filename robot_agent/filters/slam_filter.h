@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "common/angles.h"
+#include "common/archive.h"
 #include "common/se2.h"
 #include "common/sensor_types.h"
 #include "robot_agent/options/agent_options.h"
@@ -70,6 +71,10 @@ class SlamFilter {
   // Predicts with the step's odometry or IMU and corrects with its lidar scan.
   virtual void Process(const common::SensorStep& step) = 0;
   virtual FilterEstimate Estimate() const = 0;
+  // Writes or reads back the filter's state: what changes as it runs (estimates, maps, random
+  // stream, counters), not what its options fix. A filter made with the same options and seed
+  // that reads what another wrote goes on exactly as the writer would have.
+  virtual void Io(common::Archive& ar) = 0;
 
   // Landmarks seen moving since the last call (filters that detect motion: ekf_ela); a filter
   // that tracks moving landmarks instead reports none.
@@ -111,6 +116,10 @@ class SlamFilter {
     return false;
   }
 };
+
+void Io(common::Archive& ar, MapLandmark& l);
+void Io(common::Archive& ar, MovedLandmark& m);
+void Io(common::Archive& ar, FilterEstimate& e);
 
 // The index of the known kinematics nearest (v, w) (|dv| + |dw|; the first of equals), or -1
 // when there are none: which candidate a landmark reported with (v, w) follows.

@@ -2,15 +2,18 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <tuple>
 
 #include <spdlog/spdlog.h>
 
+#include "common/archive.h"
 #include "common/cpu_clock.h"
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
+#include "common/snapshot_file.h"
 #include "mrslamPubSubTypes.h"
 #include "robot_agent/cooperation/cooperation.h"
 #include "robot_agent/cooperation/sample_intake.h"
@@ -52,6 +55,7 @@ struct AgentNode::Impl {
   std::map<std::string, std::uint32_t> sent_sequence;
   AgentCounters counters;
   std::uint32_t next_step = 1;
+  std::uint32_t restored_step = 0;    // the step of the snapshot restored at the start (0: none)
   std::size_t rendezvous_logged = 0;  // rendezvous() entries logged so far
   // Samples buffered by step until the step is complete, taken only from the simulator.
   cooperation::StepSlots<common::LidarScan> lidar;
@@ -64,14 +68,15 @@ struct AgentNode::Impl {
       : agent(a),
         options(o),
         filter(std::move(f)),
-        participant({o.domain, "robot_agent/" + a.robot_id, o.shared_memory, o.security_dir, a.robot_id}),
+        participant(
+            {o.domain, "robot_agent/" + a.robot_id, o.shared_memory, o.security_dir, a.robot_id, o.history_steps}),
         lidar_reader(participant, dds::LidarTopic(a.robot_id), &notifier),
         imu_reader(participant, dds::ImuTopic(a.robot_id), &notifier),
         odometry_reader(participant, dds::OdometryTopic(a.robot_id), &notifier),
         clock_reader(participant, dds::kClockTopic, &notifier),
         estimate_writer(participant, dds::EstimateTopic(a.robot_id)),
         ack_writer(participant, dds::AckTopic(a.robot_id)),
-        final_writer(participant, dds::FinalTrajectoryTopic(a.robot_id)),
+        final_writer(participant, dds::FinalTrajectoryTopic(a.robot_id), dds::History::kWhole),
         cooperation(a),
         lidar(o.horizon_steps),
         imu(o.horizon_steps),
@@ -93,6 +98,7 @@ struct AgentNode::Impl {
   void Buffer(T sample, const common::WriterId& writer, cooperation::StepSlots<T>* slots, int (*sanitize)(T*),
               const char* what) {
     const std::uint32_t step = sample.stamp.step;
+    if (step <= restored_step) return;  // the snapshot holds it: a replay from the history
     if (const auto problem = cooperation::StampProblem(sample.stamp, agent.robot_id); !problem.empty()) {
       Reject(cooperation::Rejection::kMalformed, std::string(what) + ": " + problem);
       return;
@@ -135,6 +141,7 @@ struct AgentNode::Impl {
   void AcceptClock(const msg::StepClock& c, const common::WriterId& writer) {
     const std::uint32_t step = c.stamp().step();
     using cooperation::Rejection;
+    if (step <= restored_step) return;  // the snapshot holds it: a replay from the history
     if (const auto kind = simulator.OfferClock(writer)) {
       Reject(*kind, fmt::format("a step clock of step {} from a second participant", step));
     } else if (step < next_step) {
@@ -351,6 +358,61 @@ struct AgentNode::Impl {
     }
   }
 
+  // The agent's state: the node's bookkeeping of steps and peer messages (those received and not
+  // applied yet included), the cooperation's and the filter's.
+  void Io(common::Archive& ar) {
+    ar(next_step, step_times, inbox, received, applied_sequence, sent_sequence, counters.steps_processed,
+       counters.rejected.by_kind, rendezvous_logged);
+    cooperation.Io(ar);
+    filter->Io(ar);
+  }
+
+  std::string SnapshotPath() const {
+    return (std::filesystem::path(options.snapshot_dir) / (agent.robot_id + ".snapshot")).string();
+  }
+
+  // After step k, every snapshot_every_steps steps: the state to disk, atomically.
+  void WriteSnapshot(std::uint32_t k) {
+    if (options.snapshot_dir.empty() || options.snapshot_every_steps == 0 || k % options.snapshot_every_steps != 0)
+      return;
+    common::Archive ar = common::Archive::ForWriting();
+    Io(ar);
+    common::WriteSnapshot(SnapshotPath(), options.run_fingerprint, {k, ar.bytes()});
+  }
+
+  // At the start: the snapshot of this run in the folder, if there is one; the agent goes on
+  // from the step after it.
+  void RestoreSnapshot() {
+    if (options.snapshot_dir.empty()) return;
+    std::filesystem::create_directories(options.snapshot_dir);
+    const auto snapshot = common::ReadSnapshot(SnapshotPath(), options.run_fingerprint);
+    if (!snapshot) return;
+    common::Archive ar = common::Archive::ForReading(snapshot->payload);
+    try {
+      Io(ar);
+    } catch (const common::ArchiveError& e) {
+      throw AgentError("snapshot " + SnapshotPath() + ": " + e.what());
+    }
+    if (!ar.AtEnd() || next_step != snapshot->step + 1) {
+      throw AgentError("snapshot " + SnapshotPath() + ": does not read back as this agent's state");
+    }
+    restored_step = snapshot->step;
+    spdlog::info("restored the snapshot of step {}: going on from step {}", restored_step, next_step);
+  }
+
+  // Why no step came within the timeout: the simulator silent, or (a restarted agent that was down
+  // too long) the step it needs gone from the DDS history while later ones are there.
+  std::string NoStepWhy() const {
+    if (!clock.empty() && clock.begin()->first > next_step) {
+      return fmt::format(
+          "step {} is no longer in the DDS history (the oldest held is step {}): the agent cannot catch up "
+          "(run.history_steps = {})",
+          next_step, clock.begin()->first, options.history_steps);
+    }
+    return fmt::format("no complete step {} within {:g} s (is world_sim running on this domain?)", next_step,
+                       options.timeout_s);
+  }
+
   // Processes the next step if all of it is here. Returns true if it did.
   bool TryProcess(bool* last) {
     const std::uint32_t k = next_step;
@@ -414,13 +476,16 @@ struct AgentNode::Impl {
     Acknowledge(k, time_s, sent);
     ++counters.steps_processed;
     ++next_step;
+    if (!*last) WriteSnapshot(k);
     return true;
   }
 };
 
 AgentNode::AgentNode(const AgentOptions& agent, const AgentNodeOptions& options,
                      std::unique_ptr<filters::SlamFilter> filter)
-    : impl_(std::make_unique<Impl>(agent, options, std::move(filter))) {}
+    : impl_(std::make_unique<Impl>(agent, options, std::move(filter))) {
+  impl_->RestoreSnapshot();
+}
 
 AgentNode::~AgentNode() = default;
 
@@ -460,10 +525,7 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
       }
     }
     if (progressed) last_progress = Clock::now();
-    if (Clock::now() - last_progress > timeout) {
-      throw AgentError("no complete step " + std::to_string(a.next_step) + " within " +
-                       fmt::format("{:g}", a.options.timeout_s) + " s (is world_sim running on this domain?)");
-    }
+    if (Clock::now() - last_progress > timeout) throw AgentError(a.NoStepWhy());
     a.notifier.Wait(&seen, milliseconds(100));
   }
   return false;

@@ -32,6 +32,14 @@ struct AgentNodeOptions {
   bool allow_rejected = false;
   // DDS-Security on with the identities in this folder (the agent's identity is its robot id).
   std::string security_dir;
+  // How many samples of each stream it writes DDS keeps for late readers (0: the profiles').
+  int history_steps = 0;
+  // With a folder: the agent writes its state there (<robot>.snapshot) every
+  // snapshot_every_steps steps and, started again in the same run, restores the one it finds
+  // and goes on from the step after it. run_fingerprint names the run a snapshot belongs to.
+  std::string snapshot_dir;
+  std::uint32_t snapshot_every_steps = 50;
+  std::string run_fingerprint;
 };
 
 // What the agent processed and rejected (each rejection also logged as a warning).
@@ -44,7 +52,10 @@ struct AgentCounters {
 // step clock (never the truth), runs the filter on each complete step in order, publishes its
 // estimate on mrslam/<robot>/estimate and acknowledges the step on mrslam/<robot>/ack (step 0 =
 // ready). Sensor samples are taken only from the simulator (the participant that writes the step
-// clock); what is rejected is counted by kind (cooperation::Rejection). Owns the participant, endpoints, filter.
+// clock); what is rejected is counted by kind (cooperation::Rejection). With a snapshot folder it
+// writes its state atomically every few steps and restores it when started again (docs/faults.md,
+// "Agents that come back"); samples of steps the snapshot already holds are then replays, dropped
+// without a count. Owns the participant, endpoints, filter.
 class AgentNode {
  public:
   AgentNode(const AgentOptions& agent, const AgentNodeOptions& options, std::unique_ptr<filters::SlamFilter> filter);

@@ -512,6 +512,15 @@ bool KeyframeGraph::UpdateInliers() {
   return changed;
 }
 
+void KeyframeGraph::Io(common::Archive& ar) {
+  ar(window_, history_, pending_, landmarks_, static_tracks_, mover_models_, moving_tracks_, movers_, chain_starts_,
+     correction_, prior_, calibration_prior_, pose_correction_cov_, landmark_cov_, mover_cov_);
+  if (!ar.loading()) return;
+  if (window_.empty()) throw common::ArchiveError("archive: a keyframe graph without keyframes");
+  information_ = nullptr;  // a factorization of the last solve: that solve's own
+  information_vars_.clear();
+}
+
 void KeyframeGraph::Solve() {
   SolveWithGate();
   ComputeCovariances();

@@ -91,6 +91,10 @@ class KeyframeGraph {
 
   KeyframeGraph(const AgentOptions& options, const common::Pose2& start);
 
+  // Writes or reads back the graph: keyframes (the window and those marginalized), pending
+  // motion, landmarks, movers, the marginalization prior and the covariances last computed.
+  void Io(common::Archive& ar);
+
   // One step's calibrated odometry segments, pending until the next keyframe.
   void AddMotion(const std::vector<Motion>& segments);
   // A keyframe at `step` from the pending motion, with its readings; the pose starts at the
@@ -157,6 +161,10 @@ class KeyframeGraph {
     std::vector<std::vector<Motion>> steps;  // the odometry since the previous keyframe, per step
     Eigen::Matrix3d odometry_whitening = Eigen::Matrix3d::Identity();  // L^-1
     std::vector<StoredReading> readings;
+
+    void Io(common::Archive& ar) {
+      ar(step, pose, fixed, has_odometry, odometry_cut, steps, odometry_whitening, readings);
+    }
   };
   // A variable: a keyframe pose (by step), a landmark (by track) or the correction.
   struct Var {
@@ -170,6 +178,8 @@ class KeyframeGraph {
     std::vector<Eigen::VectorXd> x0;
     Eigen::MatrixXd h;
     Eigen::VectorXd g;
+
+    void Io(common::Archive& ar) { ar(vars, x0, h, g); }
   };
   struct Layout {
     std::map<Var, int> col;

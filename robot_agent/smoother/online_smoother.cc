@@ -223,6 +223,11 @@ std::vector<MapLandmark> OnlineSmoother::GraphLandmarks(int step) const {
   return out;
 }
 
+void OnlineSmoother::Io(common::Archive& ar) {
+  front_end_->Io(ar);
+  ar(calibration_, graph_, front_, step_, since_keyframe_, lost_keyframes_, lost_since_step_, recoveries_);
+}
+
 FilterEstimate OnlineSmoother::Estimate() const {
   FilterEstimate out;
   out.step = front_.step;

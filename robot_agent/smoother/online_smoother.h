@@ -40,6 +40,8 @@ class OnlineSmoother : public filters::SlamFilter {
 
   void Process(const common::SensorStep& step) override;
   filters::FilterEstimate Estimate() const override;
+  // The front end's state, the calibration, the graph and the bookkeeping of lost keyframes.
+  void Io(common::Archive& ar) override;
   int MergeLandmarks(const std::vector<filters::MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                      double gate_probability, double too_close_m) override;
 

@@ -236,6 +236,7 @@ bool StartEvaluator(ProcessSupervisor* children, const RunArgs& run, ProgressMon
 struct RunCost {
   double wall_s = 0.0;
   double cpu_s = 0.0;
+  std::map<std::string, long> peak_rss_kib;  // by process name
 };
 
 // Reads the summary the evaluator wrote into dir, adds the run's cost and DDS domain, and
@@ -268,6 +269,8 @@ int FinishSummary(const std::string& dir, const RunCost& cost, int domain, const
   summary["cpu_seconds"] = cost.cpu_s;
   summary["cpu_cores_mean"] = cost.wall_s > 0.0 ? cost.cpu_s / cost.wall_s : 0.0;
   summary["dds_domain"] = domain;
+  json& peak = summary["peak_rss_mib"] = json::object();
+  for (const auto& [name, kib] : cost.peak_rss_kib) peak[name] = static_cast<double>(kib) / 1024.0;
   if (summary.contains("robots") && summary["robots"].is_object()) {
     for (auto& [id, robot] : summary["robots"].items()) {
       const auto it = restarted.restarts.find(kAgentPrefix + id);
@@ -299,13 +302,32 @@ bool FinishedBeforeItDied(const ChildExit& e, const Progress& progress, int tota
   return true;
 }
 
+// A folder emptied when made and removed when it goes (nothing for an empty path).
+class SnapshotFolder {
+ public:
+  explicit SnapshotFolder(std::string path) : path_(std::move(path)) { Remove(); }
+  ~SnapshotFolder() { Remove(); }
+  SnapshotFolder(const SnapshotFolder&) = delete;
+  SnapshotFolder& operator=(const SnapshotFolder&) = delete;
+
+ private:
+  void Remove() const {
+    std::error_code ignored;
+    if (!path_.empty()) fs::remove_all(path_, ignored);
+  }
+  std::string path_;
+};
+
 // Runs one seed into dir. Returns kOk (and the summary), kFailed or kStopped.
 int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, const std::string& scenario_path,
             long long seed, int domain, const std::string& dir, const std::string& progress_prefix,
             const std::atomic<bool>& stop, json* summary_out) {
   fs::create_directories(dir + "/logs");
   fs::remove(dir + "/summary.json");  // a stale summary must not pass for this run's
-  const RunArgs run = ChildArgs(flags, scenario_path, domain, seed);
+  RunArgs run = ChildArgs(flags, scenario_path, domain, seed);
+  // With restarts, the agents' snapshots: fresh for the run, gone after it.
+  if (flags.restarts > 0) run.snapshot_dir = dir + "/snapshots";
+  const SnapshotFolder snapshots(run.snapshot_dir);
 
   const auto start = Clock::now();
   const double cpu_start = common::ProcessTreeCpuSeconds();
@@ -380,7 +402,7 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     if (end.kind == RunEnd::Kind::kStopped) return kStopped;
     return monitor_joined && !first_step_at ? kFailedBeforeStep1 : kFailed;
   }
-  const RunCost cost{Seconds(Clock::now() - start), common::ProcessTreeCpuSeconds() - cpu_start};
+  const RunCost cost{Seconds(Clock::now() - start), common::ProcessTreeCpuSeconds() - cpu_start, end.peak_rss_kib};
   return FinishSummary(dir, cost, domain, {end.restarts, comebacks.seconds()}, summary_out);
 }
 
@@ -539,9 +561,11 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
       ->expected(0, 1)
       ->default_str("8765")
       ->check(CLI::Range(0, 65535));
-  app.add_option("--restart", flags->restarts,
-                 "Start a robot_agent that dies (a signal or a non-zero exit) again with the same command, up to N "
-                 "times per agent; it rejoins the run (docs/faults.md). 0: a dead agent fails the run")
+  app.add_option(
+         "--restart", flags->restarts,
+         "Start a robot_agent that dies (a signal or a non-zero exit) again with the same command, up to N "
+         "times per agent; it restores its latest snapshot (every run.snapshot_every_steps steps) and rejoins the "
+         "run (docs/faults.md). 0: a dead agent fails the run")
       ->check(CLI::Range(0, 1000));
   app.add_flag("--secure", flags->secure,
                "DDS-Security on: make identities for the run's processes into OUT/security and pass --security to "

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -138,10 +139,12 @@ std::vector<ChildExit> ProcessSupervisor::Reap() {
   for (auto& child : children_) {
     if (child.reaped) continue;
     int status = 0;
-    const pid_t r = waitpid(child.pid, &status, WNOHANG);
+    rusage usage{};
+    const pid_t r = wait4(child.pid, &status, WNOHANG, &usage);
     if (r == child.pid) {
       child.reaped = true;
       ended.push_back(ToExit(child, status));
+      ended.back().peak_rss_kib = usage.ru_maxrss;
     } else if (r < 0 && errno == ECHILD) {
       child.reaped = true;  // someone else reaped it: treat it as lost
       ChildExit e{child.name, child.pid, 1, 0, child.log_path};
@@ -184,10 +187,12 @@ std::vector<ChildExit> ProcessSupervisor::StopAll(std::chrono::milliseconds grac
       if (child.reaped) continue;
       kill(child.pid, SIGKILL);
       int status = 0;
-      while (waitpid(child.pid, &status, 0) < 0 && errno == EINTR) {
+      rusage usage{};
+      while (wait4(child.pid, &status, 0, &usage) < 0 && errno == EINTR) {
       }
       child.reaped = true;
       ended.push_back(ToExit(child, status));
+      ended.back().peak_rss_kib = usage.ru_maxrss;
     }
   }
   return ended;

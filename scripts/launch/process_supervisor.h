@@ -16,6 +16,7 @@ struct ChildExit {
   int exit_code = 0;  // the process's exit code, or 128 + signal when a signal ended it
   int signal = 0;     // the signal that ended it, 0 if it exited
   std::string log_path;
+  long peak_rss_kib = 0;  // the most memory it held (getrusage's ru_maxrss), 0 if not known
 
   bool ok() const { return signal == 0 && exit_code == 0; }
   // "exited with code 3" or "was killed by signal 9 (Killed)".

@@ -1,5 +1,7 @@
 #include "scripts/launch/simulation_run.h"
 
+#include <algorithm>
+
 namespace mrslam::launch {
 
 namespace {
@@ -45,6 +47,7 @@ void StartSimulation(ProcessSupervisor* children, const RunArgs& run, const std:
     const std::string name = "robot_agent_" + id;
     std::vector<std::string> extra = {"--robot", id, "--wait-readers", std::to_string(estimate_readers)};
     if (run.allow_rejected) extra.emplace_back("--allow-rejected");
+    if (!run.snapshot_dir.empty()) extra.insert(extra.end(), {"--snapshot-dir", run.snapshot_dir});
     children->Start(name, ChildCommand(run, "robot_agent", extra), log_prefix + name + ".log");
   }
   children->Start("world_sim", ChildCommand(run, "world_sim", {"--wait-readers", std::to_string(truth_readers)}),
@@ -55,13 +58,16 @@ RunEnd SuperviseRun(ProcessSupervisor* children, const RunLimits& limits, const 
                     const std::function<void()>& tick, const RestartPolicy& restart) {
   std::optional<Clock::time_point> world_done_at;
   std::map<std::string, int> restarts;
+  std::map<std::string, long> peak_rss_kib;
   const auto end = [&](RunEnd::Kind kind, std::optional<ChildExit> failure = std::nullopt) {
-    return RunEnd{kind, std::move(failure), restarts};
+    return RunEnd{kind, std::move(failure), restarts, peak_rss_kib};
   };
   while (true) {
     if (stop) return end(RunEnd::Kind::kStopped);
     std::optional<ChildExit> failure;
     for (auto& e : children->Reap()) {
+      long& peak = peak_rss_kib[e.name];
+      peak = std::max(peak, e.peak_rss_kib);
       if (e.ok() && e.name == "world_sim") world_done_at = Clock::now();
       if (e.ok() || failure || MaybeRestart(children, e, !world_done_at, restart, &restarts)) continue;
       failure = e;

@@ -26,6 +26,7 @@ struct RunArgs {
   std::string log_level;        // empty: each process's default
   bool allow_rejected = false;  // the agents end normally after input that fails a run
   std::string security_dir{};   // DDS-Security with the identities in this folder (empty: off)
+  std::string snapshot_dir{};   // the agents' snapshots (robot_agent --snapshot-dir; empty: none)
 };
 
 // The command line of one of the run's processes: the executable beside this one, the run's
@@ -65,6 +66,8 @@ struct RunEnd {
   Kind kind = Kind::kDone;
   std::optional<ChildExit> failure;     // kFailed: the first child that failed
   std::map<std::string, int> restarts;  // by child name, those restarted at least once
+  // By child name, the most memory (KiB) it held: of a restarted one, the largest of its lives.
+  std::map<std::string, long> peak_rss_kib;
 };
 
 // Watches the children until every one has ended, one has failed, a limit has run out or stop

@@ -84,10 +84,18 @@ std::map<pid_t, std::string> ChildrenOf(pid_t parent) {
 
 std::map<pid_t, std::string> WaitForChildren(pid_t parent, std::size_t count, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  auto children = ChildrenOf(parent);
+  const std::string parent_command = CommandLine(parent);
+  // A child between fork and exec still shows the parent's command line: not counted yet.
+  const auto started = [&] {
+    auto children = ChildrenOf(parent);
+    for (auto it = children.begin(); it != children.end();)
+      it = it->second == parent_command ? children.erase(it) : ++it;
+    return children;
+  };
+  auto children = started();
   while (children.size() < count && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    children = ChildrenOf(parent);
+    children = started();
   }
   return children;
 }

@@ -133,7 +133,8 @@ class TempDir {
 // The children of a process (from /proc), with their command lines.
 std::map<pid_t, std::string> ChildrenOf(pid_t parent);
 
-// Waits until the process has at least `count` children (or the timeout) and returns them.
+// Waits until the process has at least `count` children that have started their own program (or
+// the timeout) and returns those.
 std::map<pid_t, std::string> WaitForChildren(pid_t parent, std::size_t count, std::chrono::milliseconds timeout);
 
 // The first of the processes whose command line holds every one of `parts`; 0 if none.

@@ -161,6 +161,12 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
   ExpectFiniteAtLeast(summary, "cpu_seconds", 1e-3, "run");
   ExpectFiniteAtLeast(summary, "cpu_cores_mean", 1e-3, "run");
   EXPECT_LE(summary["cpu_cores_mean"].get<double>(), static_cast<double>(std::thread::hardware_concurrency()) + 0.5);
+  // Every process's peak memory: more than a megabyte, less than the machine's.
+  ASSERT_TRUE(summary.contains("peak_rss_mib")) << summary.dump(2);
+  for (const std::string process : {"world_sim", "evaluator", "robot_agent_r1", "robot_agent_r2"}) {
+    ExpectFiniteAtLeast(summary["peak_rss_mib"], process, 1.0, "peak_rss_mib");
+    EXPECT_LT(summary["peak_rss_mib"][process].get<double>(), 1e6);
+  }
   ASSERT_TRUE(summary.contains("robots"));
   for (const std::string id : {"r1", "r2"}) {
     ASSERT_TRUE(summary["robots"].contains(id)) << summary.dump(2);

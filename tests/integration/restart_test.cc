@@ -1,6 +1,7 @@
 // Multi-process: with --restart, an agent killed with SIGKILL in the middle of a lockstep run is
-// started again by the launcher, rejoins the run, and the run ends with the same numbers as an
-// uninterrupted run of the same seed; the summary counts the restart.
+// started again by the launcher, restores its latest snapshot, rejoins the run, and the run ends
+// with the same numbers as an uninterrupted run of the same seed; the summary counts the restart.
+// The DDS history is shorter than the step of the kill: only the snapshot can bring it back.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -32,10 +33,16 @@ constexpr int kPlainDomain = 100;
 constexpr int kRestartDomain = 101;
 
 constexpr int kSteps = 150;
-constexpr std::uint32_t kKillAfterStep = 20;
+constexpr std::uint32_t kKillAfterStep = 25;
 
 std::vector<std::string> LaunchArgs(const std::string& out, int domain, const std::vector<std::string>& extra) {
-  std::vector<std::string> args = {"--no-plots", "--set", "run.steps=" + std::to_string(kSteps)};
+  std::vector<std::string> args = {"--no-plots",
+                                   "--set",
+                                   "run.steps=" + std::to_string(kSteps),
+                                   "--set",
+                                   "run.snapshot_every_steps=10",
+                                   "--set",
+                                   "run.history_steps=12"};
   args.insert(args.end(), extra.begin(), extra.end());
   return testing::TwoRobotLaunchArgs(out, domain, args);
 }
@@ -47,7 +54,8 @@ nlohmann::json ReadJson(const std::string& path) {
 
 // The summary's numbers without what differs between any two runs (times, domain, restarts).
 nlohmann::json Numbers(nlohmann::json summary) {
-  for (const char* key : {"wall_seconds", "evaluator_wall_seconds", "dds_domain", "cpu_seconds", "cpu_cores_mean"})
+  for (const char* key :
+       {"wall_seconds", "evaluator_wall_seconds", "dds_domain", "cpu_seconds", "cpu_cores_mean", "peak_rss_mib"})
     summary.erase(key);
   for (auto& [id, robot] : summary["robots"].items()) {
     for (const char* key : {"step_cpu_ms_median", "step_cpu_ms_p99", "latency_us_median", "latency_us_p99", "restarts",
@@ -78,6 +86,8 @@ TEST(RestartTest, AKilledAgentComesBackAndTheRunEqualsAnUninterruptedOne) {
   const std::string output = ReadFile(temp_dir.path() + "/restart.log");
   EXPECT_THAT(output, HasSubstr("robot_agent_r2"));
   EXPECT_THAT(output, HasSubstr("restarting it (restart 1 of 2)"));
+  EXPECT_THAT(ReadFile(restart_out + "/logs/robot_agent_r2.log"), HasSubstr("restored the snapshot of step"));
+  EXPECT_FALSE(std::filesystem::exists(restart_out + "/snapshots")) << "the snapshots outlive the run";
 
   const auto summary = ReadJson(restart_out + "/summary.json");
   ASSERT_TRUE(summary.is_object());

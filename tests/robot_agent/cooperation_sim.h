@@ -29,6 +29,7 @@ class FakeFilter : public filters::SlamFilter {
  public:
   void Process(const common::SensorStep&) override {}
   filters::FilterEstimate Estimate() const override { return estimate; }
+  void Io(common::Archive& ar) override { ar(estimate, merges, robot_observations, notices); }
   int MergeLandmarks(const std::vector<filters::MapLandmark>& in, robot_agent::MapFusionRule rule,
                      double gate_probability, double /*too_close_m*/) override {
     ++merges;

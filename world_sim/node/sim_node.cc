@@ -55,7 +55,7 @@ struct SimNode::Impl {
         options(o),
         source(MakeSource(s)),
         world(*source),
-        participant({o.domain, "world_sim", o.shared_memory, o.security_dir, "world_sim"}) {
+        participant({o.domain, "world_sim", o.shared_memory, o.security_dir, "world_sim", s.run.history_steps}) {
     for (const auto& r : s.robots) {
       auto& w = writers[r.id];
       w.lidar = std::make_unique<dds::Writer<msg::LidarScanPubSubType>>(participant, dds::LidarTopic(r.id));
