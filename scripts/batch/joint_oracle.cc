@@ -55,4 +55,10 @@ void JointOracle::CatchUp(int i) {
   }
 }
 
+int JointOracle::SmootherHeld(int i, int j) const {
+  const Holder& holder = robots_.at(i);
+  const int r = holder.index.at(j);
+  return r < 0 ? 0 : holder.smoother->Steps(r);
+}
+
 }  // namespace mrslam::batch

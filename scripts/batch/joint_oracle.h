@@ -37,6 +37,9 @@ class JointOracle {
   // Robot i's estimate (its own pose: robot 0 of the smoother), in G_i.
   const robot_agent::smoother::BatchSmoother& Of(int i) const { return *robots_.at(i).smoother; }
   const InformationSets& Sets() const { return sets_; }
+  // The last step of robot j's data robot i's smoother holds (0: none); Sets().Held(i, j) after
+  // every Process.
+  int SmootherHeld(int i, int j) const;
 
  private:
   struct Holder {  // one robot's view
