@@ -54,13 +54,13 @@ namespace mrslam::robot_agent::smoother {
 // any robot holds (a static one: one state); the factors are those above over exactly these
 // unknowns: robot r's motion for t = 1..S_r, each landmark's motion for t = a+1..b, every
 // reading of a landmark at its state at the reading's step, and a detection by robot r of robot
-// q at step t only once q's pose x^q_t is held (t <= S_q; until then it waits). A chain read
-// before its first state is extended backwards by the inverse unicycle step,
-// l_{t-1} = l_t (+) (-f(0; v, w)), and forward to b by the unicycle step; its heading is started
-// from the chord between its first two sightings, whichever comes first in time. With every S_r
-// equal this is the problem above, built in the same order (Add(steps) = Add(r, steps[r]) for
-// r in order, the same arithmetic). A detection of a robot counts only if that robot is in the
-// set when the detection is added.
+// q at step t only once q's pose x^q_t is held (t <= S_q; until then it waits). A unicycle step
+// is a composition with a fixed increment, l_t = l_{t-1} * d with d = f(origin; v, w), so a chain
+// read before its first state is started backwards by l_{t-1} = l_t * d^-1, and forward to b by
+// l_t = l_{t-1} * d; its heading is started from the chord between its first two sightings,
+// whichever comes first in time. With every S_r equal this is the problem above, built in the
+// same order with the same arithmetic (Add(steps), or Add(r, steps[r]) for every r in the set's
+// order). A detection of a robot counts only if that robot is in the set when it is added.
 // Pure; not thread-safe.
 class BatchSmoother {
  public:
