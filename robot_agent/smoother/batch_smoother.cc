@@ -70,8 +70,12 @@ BatchSmoother::BatchSmoother(const AgentOptions& options, const std::vector<Robo
       robot_detections_from_step_(robot_detections_from_step),
       kinematics_(std::move(kinematics)) {
   if (robots.empty()) throw std::invalid_argument("the reference needs at least one robot");
-  for (const auto& robot : robots)
-    robots_.push_back({robot.id, {robot.first_pose}, filters::OdometryCalibration(options.filter), {}});
+  for (const auto& robot : robots) AddRobot(robot);
+}
+
+int BatchSmoother::AddRobot(const RobotStart& robot) {
+  robots_.push_back({robot.id, {robot.first_pose}, filters::OdometryCalibration(filter_), {}});
+  return static_cast<int>(robots_.size()) - 1;
 }
 
 Pose2 BatchSmoother::StepLandmark(const Pose2& l, const Kinematics& k) const {
@@ -80,27 +84,64 @@ Pose2 BatchSmoother::StepLandmark(const Pose2& l, const Kinematics& k) const {
 
 void BatchSmoother::Add(const std::vector<common::SensorStep>& steps) {
   if (steps.size() != robots_.size()) throw std::invalid_argument("the reference needs one step per robot");
-  const int t = static_cast<int>(robots_.front().path.size());
-  for (std::size_t r = 0; r < robots_.size(); ++r) {
-    Robot& robot = robots_[r];
-    robot.motion.push_back(robot.calibration.Step(steps[r].odometry, steps[r].lidar.stamp.time_s, dt_s_));
-    robot.path.push_back(common::Compose(robot.path.back(), Increment(robot, t, robot.correction)));
-  }
-  for (auto& [id, chain] : chains_) {
-    if (!chain.kinematics.is_static) chain.states.push_back(StepLandmark(chain.states.back(), chain.kinematics));
-  }
-  for (std::size_t r = 0; r < robots_.size(); ++r) {
-    for (const auto& d : steps[r].lidar.landmarks) AddLandmarkReading(static_cast<int>(r), t, d);
-    if (t < robot_detections_from_step_) continue;
-    for (const auto& d : steps[r].lidar.robots) {
-      for (std::size_t seen = 0; seen < robots_.size(); ++seen) {
-        if (seen != r && robots_[seen].id == d.seen_robot_id && std::isfinite(d.range_m) &&
-            std::isfinite(d.bearing_rad)) {
-          readings_.push_back({t, static_cast<int>(r), -1, static_cast<int>(seen), d.range_m, d.bearing_rad});
-        }
+  for (std::size_t r = 0; r < robots_.size(); ++r) AppendPose(static_cast<int>(r), steps[r]);
+  ExtendChains();
+  for (std::size_t r = 0; r < robots_.size(); ++r) AddReadings(static_cast<int>(r), steps[r]);
+}
+
+void BatchSmoother::Add(int r, const common::SensorStep& step) {
+  AppendPose(r, step);
+  ExtendChains();
+  AddReadings(r, step);
+}
+
+void BatchSmoother::AppendPose(int r, const common::SensorStep& step) {
+  Robot& robot = robots_.at(r);
+  const int t = static_cast<int>(robot.path.size());
+  robot.motion.push_back(robot.calibration.Step(step.odometry, step.lidar.stamp.time_s, dt_s_));
+  robot.path.push_back(common::Compose(robot.path.back(), Increment(robot, t, robot.correction)));
+}
+
+void BatchSmoother::AddReadings(int r, const common::SensorStep& step) {
+  const int t = Steps(r);
+  for (const auto& d : step.lidar.landmarks) AddLandmarkReading(r, t, d);
+  if (t < robot_detections_from_step_) return;
+  for (const auto& d : step.lidar.robots) {
+    for (std::size_t seen = 0; seen < robots_.size(); ++seen) {
+      if (static_cast<int>(seen) != r && robots_[seen].id == d.seen_robot_id && std::isfinite(d.range_m) &&
+          std::isfinite(d.bearing_rad)) {
+        readings_.push_back({t, r, -1, static_cast<int>(seen), d.range_m, d.bearing_rad});
       }
     }
   }
+}
+
+int BatchSmoother::Horizon() const {
+  int horizon = 0;
+  for (int r = 0; r < static_cast<int>(robots_.size()); ++r) horizon = std::max(horizon, Steps(r));
+  return horizon;
+}
+
+void BatchSmoother::ExtendChains() {
+  const int horizon = Horizon();
+  for (auto& [id, chain] : chains_) ExtendChain(&chain, horizon);
+}
+
+void BatchSmoother::ExtendChain(Chain* chain, int horizon) const {
+  if (chain->kinematics.is_static) return;
+  while (chain->first_step + static_cast<int>(chain->states.size()) - 1 < horizon) {
+    chain->states.push_back(StepLandmark(chain->states.back(), chain->kinematics));
+  }
+}
+
+void BatchSmoother::PrependChain(Chain* chain, int t) const {
+  if (chain->kinematics.is_static || t >= chain->first_step) return;
+  const Pose2 back = common::Inverse(StepLandmark(Pose2{}, chain->kinematics));
+  std::vector<Pose2> earlier(static_cast<std::size_t>(chain->first_step - t));
+  Pose2 l = chain->states.front();
+  for (auto it = earlier.rbegin(); it != earlier.rend(); ++it) *it = l = common::Compose(l, back);
+  chain->states.insert(chain->states.begin(), earlier.begin(), earlier.end());
+  chain->first_step = t;
 }
 
 void BatchSmoother::AddLandmarkReading(int r, int t, const common::LandmarkDetection& d) {
@@ -109,26 +150,37 @@ void BatchSmoother::AddLandmarkReading(int r, int t, const common::LandmarkDetec
   const bool known = listed != kinematics_.end() || unlisted_ == Unlisted::kStatic;
   if (!known || !std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad)) return;
   readings_.push_back({t, r, d.landmark_id, -1, d.range_m, d.bearing_rad});
-  const Eigen::Vector2d point = common::PointFromRangeBearing(robots_[r].path.back(), {d.range_m, d.bearing_rad});
+  const Eigen::Vector2d point = common::PointFromRangeBearing(robots_[r].path[t], {d.range_m, d.bearing_rad});
   auto [it, created] = chains_.try_emplace(d.landmark_id);
   Chain& chain = it->second;
   if (created) {
     chain.first_step = t;
     if (listed != kinematics_.end()) chain.kinematics = listed->second;
     chain.states.push_back({point.x(), point.y(), 0.0});
-  } else if (chain.sightings == 1 && !chain.kinematics.is_static && t > chain.first_step) {
-    // Second sighting: the heading from the displacement since the first (the chord of the arc
-    // turns by w dt / 2 per step less than the heading at its end), then the chain again.
-    const int steps = t - chain.first_step;
-    const Pose2& first = chain.states.front();
-    const double chord = std::atan2(point.y() - first.y, point.x() - first.x);
-    Pose2 l{first.x, first.y, WrapAngle(chord - 0.5 * chain.kinematics.w_radps * dt_s_ * (steps + 1))};
-    for (auto& state : chain.states) {
-      state = l;
-      l = StepLandmark(l, chain.kinematics);
-    }
+    ExtendChain(&chain, Horizon());
+  } else {
+    const int seen_at = chain.first_step;  // with one sighting, its step
+    PrependChain(&chain, t);
+    if (chain.sightings == 1 && !chain.kinematics.is_static && t != seen_at) StartHeading(&chain, seen_at, t, point);
   }
   ++chain.sightings;
+}
+
+// The two sightings a (earlier) and b (later), n = b - a steps apart: the heading at a from the
+// chord between them (the chord of the arc turns by w dt / 2 per step less than the heading at
+// its end), then the chain again from its first state (at a).
+void BatchSmoother::StartHeading(Chain* chain, int seen_at, int t, const Eigen::Vector2d& point) const {
+  const Pose2& seen = chain->states[StateIndex(*chain, seen_at)];
+  const bool later = t > seen_at;
+  const Eigen::Vector2d a = later ? seen.Translation() : point;
+  const Eigen::Vector2d b = later ? point : seen.Translation();
+  const int steps = later ? t - seen_at : seen_at - t;
+  const double chord = std::atan2(b.y() - a.y(), b.x() - a.x());
+  Pose2 l{a.x(), a.y(), WrapAngle(chord - 0.5 * chain->kinematics.w_radps * dt_s_ * (steps + 1))};
+  for (auto& state : chain->states) {
+    state = l;
+    l = StepLandmark(l, chain->kinematics);
+  }
 }
 
 void BatchSmoother::Solve() {
@@ -157,6 +209,7 @@ bool BatchSmoother::UpdateInliers() {
   const double gate = common::ChiSquare2Quantile(filter_.outlier_gate_probability);
   bool changed = false;
   for (Reading& z : readings_) {
+    if (!Usable(z)) continue;
     const bool inlier = WhitenedResidual(z).squaredNorm() <= gate;
     changed = changed || inlier != z.inlier;
     z.inlier = inlier;
@@ -174,10 +227,10 @@ Pose2 BatchSmoother::Increment(const Robot& robot, int t, const Eigen::Vector3d&
 
 BatchSmoother::Layout BatchSmoother::MakeLayout() const {
   Layout layout;
-  layout.steps = static_cast<int>(robots_.front().path.size()) - 1;
   for (std::size_t r = 0; r < robots_.size(); ++r) {
     layout.robot_base.push_back(layout.cols);
-    layout.cols += 3 * (r == 0 ? layout.steps : layout.steps + 1);
+    const int steps = Steps(static_cast<int>(r));
+    layout.cols += 3 * (r == 0 ? steps : steps + 1);
   }
   for (const auto& [id, chain] : chains_) {
     layout.chain_col[id] = layout.cols;
@@ -204,7 +257,7 @@ void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
   for (std::size_t r = 0; r < robots_.size(); ++r) {
     const Robot& robot = robots_[r];
     const int ri = static_cast<int>(r);
-    for (int t = 1; t <= layout.steps; ++t) {
+    for (int t = 1; t <= Steps(ri); ++t) {
       const Pose2 increment = Increment(robot, t, robot.correction);
       const Pose2& previous = robot.path[t - 1];
       const Eigen::Vector3d res = robot_w.asDiagonal() * Minus(robot.path[t], common::Compose(previous, increment));
@@ -247,7 +300,7 @@ void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
     }
   }
   for (const Reading& z : readings_) {
-    if (!z.inlier) continue;
+    if (!z.inlier || !Usable(z)) continue;
     const Pose2& x = robots_[z.robot].path[z.step];
     const Eigen::Vector2d p = Target(z);
     const int target_col = z.landmark_id >= 0
@@ -279,7 +332,7 @@ void BatchSmoother::SolveOnce() {
   };
   auto apply = [&](const Eigen::VectorXd& delta, double sign) {
     for (std::size_t r = 0; r < robots_.size(); ++r) {
-      for (int t = r == 0 ? 1 : 0; t <= layout.steps; ++t) {
+      for (int t = r == 0 ? 1 : 0; t <= Steps(static_cast<int>(r)); ++t) {
         Pose2& x = robots_[r].path[t];
         x = Pose2::FromVector(x.Vector() + sign * delta.segment<3>(layout.RobotCol(static_cast<int>(r), t)));
       }
@@ -346,7 +399,7 @@ Eigen::Matrix3d BatchSmoother::PoseBlockCovariance(int r, int t) const {
   const Eigen::SparseMatrix<double> h = j.transpose() * j;
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(h);
   Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, 3);
-  const int col = layout.RobotCol(r, t < 0 ? layout.steps : t);
+  const int col = layout.RobotCol(r, t < 0 ? Steps(r) : t);
   e.block<3, 3>(col, 0).setIdentity();
   const Eigen::MatrixXd x = information.solve(e);
   const bool ok = information.info() == Eigen::Success && x.allFinite();

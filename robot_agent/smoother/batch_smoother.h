@@ -45,6 +45,22 @@ namespace mrslam::robot_agent::smoother {
 // factor s_v, a turn-rate factor s_w and a turn-rate bias b_w, the motion being the calibrated
 // odometry's (s_v v, s_w w + b_w), with priors N(1, 0.1^2), N(1, 0.1^2), N(0, (0.05 rad/s)^2):
 // a model of a real robot's systematic odometry errors that the fixed calibration leaves.
+//
+// Unequal steps: the robots of the set may hold different numbers of steps, robot r its steps
+// 1..S_r (a peer's data up to the last step it was handed over; Add(r, step) appends robot r's
+// next one, AddRobot adds a robot to the set). The unknowns are then robot r's poses
+// x^r_0..x^r_{S_r} (the first robot's x^0_0 known), and a moving landmark's states
+// l_a..l_b from the earliest step a at which any robot read it to the newest step b = max_r S_r
+// any robot holds (a static one: one state); the factors are those above over exactly these
+// unknowns: robot r's motion for t = 1..S_r, each landmark's motion for t = a+1..b, every
+// reading of a landmark at its state at the reading's step, and a detection by robot r of robot
+// q at step t only once q's pose x^q_t is held (t <= S_q; until then it waits). A unicycle step
+// is a composition with a fixed increment, l_t = l_{t-1} * d with d = f(origin; v, w), so a chain
+// read before its first state is started backwards by l_{t-1} = l_t * d^-1, and forward to b by
+// l_t = l_{t-1} * d; its heading is started from the chord between its first two sightings,
+// whichever comes first in time. With every S_r equal this is the problem above, built in the
+// same order with the same arithmetic (Add(steps), or Add(r, steps[r]) for every r in the set's
+// order). A detection of a robot counts only if that robot is in the set when it is added.
 // Pure; not thread-safe.
 class BatchSmoother {
  public:
@@ -72,15 +88,21 @@ class BatchSmoother {
                 std::map<int, Kinematics> kinematics, int robot_detections_from_step,
                 Unlisted unlisted = Unlisted::kLeftOut);
 
-  // One sensor step per robot of the set, in the set's order, then Solve.
+  // One sensor step more per robot of the set, in the set's order, then Solve.
   void Process(const std::vector<common::SensorStep>& steps) {
     Add(steps);
     Solve();
   }
   void Process(const common::SensorStep& step) { Process(std::vector<common::SensorStep>{step}); }
-  // One sensor step per robot without solving: the new poses follow the odometry from the last
-  // ones, a new landmark is placed from its first reading.
+  // One sensor step more per robot without solving: the new poses follow the odometry from the
+  // last ones, a new landmark is placed from its first reading.
   void Add(const std::vector<common::SensorStep>& steps);
+  // Robot r's next step (S_r + 1) alone, without solving.
+  void Add(int r, const common::SensorStep& step);
+  // Adds a robot to the set, holding its first pose only (a starting guess); returns its index.
+  int AddRobot(const RobotStart& robot);
+  // S_r: the last step robot r holds (0: its first pose only).
+  int Steps(int r) const { return static_cast<int>(robots_.at(r).path.size()) - 1; }
   // The MAP estimate of everything added so far (warm-started from the current one).
   void Solve();
   // Estimates each robot's odometry factors and turn-rate bias too (call before Add).
@@ -129,15 +151,31 @@ class BatchSmoother {
   };
 
   common::Pose2 StepLandmark(const common::Pose2& l, const Kinematics& k) const;
+  // Robot r's next pose from its odometry.
+  void AppendPose(int r, const common::SensorStep& step);
+  // Robot r's readings of its newest step.
+  void AddReadings(int r, const common::SensorStep& step);
   void AddLandmarkReading(int r, int t, const common::LandmarkDetection& d);
+  // The newest step any robot holds, and every moving chain's states up to it.
+  int Horizon() const;
+  void ExtendChains();
+  void ExtendChain(Chain* chain, int horizon) const;
+  // A moving chain's states back to step t (inverse unicycle steps).
+  void PrependChain(Chain* chain, int t) const;
+  // Restarts a moving chain from its two sightings (at seen_at, its state there, and at t, point).
+  void StartHeading(Chain* chain, int seen_at, int t, const Eigen::Vector2d& point) const;
   static int StateIndex(const Chain& chain, int t);  // of a landmark's state at step t
+  // A reading whose target is held (a robot detection waits for the seen robot's pose).
+  bool Usable(const Reading& z) const {
+    return z.landmark_id >= 0 || z.step < static_cast<int>(robots_[z.seen].path.size());
+  }
   // Gauss-Newton with Levenberg damping over the inlying readings.
   void SolveOnce();
   // The unknowns' columns: every robot's poses (the first robot's from step 1, the others' from
   // their first pose), then every chain's states in id order, then (if estimated) every robot's
   // correction.
   struct Layout {
-    int steps = 0, cols = 0, correction_base = -1;
+    int cols = 0, correction_base = -1;
     std::vector<int> robot_base;
     std::map<int, int> chain_col;      // by landmark id
     int RobotCol(int r, int t) const;  // -1: the first robot's first pose, known

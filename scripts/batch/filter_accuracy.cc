@@ -4,17 +4,21 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
 #include "common/config/agent_options_projection.h"
+#include "common/progress_line.h"
 #include "common/se2.h"
 #include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/smoother/batch_smoother.h"
 #include "scripts/batch/batch_report.h"
+#include "scripts/batch/joint_oracle.h"
 #include "scripts/batch/oracle_reference.h"
 #include "world_sim/evaluator/metrics.h"
 #include "world_sim/evaluator/robot_scorer.h"
@@ -23,12 +27,27 @@
 namespace mrslam::batch {
 namespace {
 
-// One robot's estimator in a run: its own filter, or the reference.
+// A robot's current pose and map (landmark positions with their identities).
+struct Output {
+  common::Pose2 pose;
+  std::optional<Eigen::Matrix3d> covariance;  // none from a reference
+  std::vector<evaluator::MapPoint> map;
+};
+
+// A reference's output: its first robot's pose and every landmark it holds.
+Output OutputOf(const robot_agent::smoother::BatchSmoother& reference) {
+  Output out;
+  out.pose = reference.Pose();
+  for (const auto& [position, id] : reference.Landmarks()) out.map.push_back({position, id});
+  return out;
+}
+
+// One robot's estimator in a run: its own filter, or its reference (alone).
 class Estimator {
  public:
   Estimator(const common::ScenarioOptions& options, int robot_index, std::uint64_t seed, bool reference) {
     if (reference) {
-      reference_ = std::make_unique<robot_agent::smoother::BatchSmoother>(OracleSmoother(options, {robot_index}));
+      reference_ = MakeOracleReference(options, FieldStatics(options), {robot_index}, {}, 0);
     } else {
       filter_ =
           robot_agent::factory::CreateFilter(common::AgentOptionsFor(options, options.robots[robot_index].id), seed);
@@ -42,23 +61,13 @@ class Estimator {
       reference_->Process(step);
     }
   }
-  // The current pose and map (landmark positions with their identities).
-  struct Output {
-    common::Pose2 pose;
-    std::optional<Eigen::Matrix3d> covariance;  // none from the reference
-    std::vector<evaluator::MapPoint> map;
-  };
   Output Estimate() const {
+    if (!filter_) return OutputOf(*reference_);
     Output out;
-    if (filter_) {
-      const robot_agent::filters::FilterEstimate e = filter_->Estimate();
-      out.pose = e.pose;
-      out.covariance = e.covariance;
-      for (const auto& l : e.landmarks) out.map.push_back({l.mean.head<2>(), l.landmark_id});
-    } else {
-      out.pose = reference_->Pose();
-      for (const auto& [position, id] : reference_->Landmarks()) out.map.push_back({position, id});
-    }
+    const robot_agent::filters::FilterEstimate e = filter_->Estimate();
+    out.pose = e.pose;
+    out.covariance = e.covariance;
+    for (const auto& l : e.landmarks) out.map.push_back({l.mean.head<2>(), l.landmark_id});
     return out;
   }
 
@@ -67,36 +76,82 @@ class Estimator {
   std::unique_ptr<robot_agent::smoother::BatchSmoother> reference_;
 };
 
+// Every robot's estimator in a run: one Estimator each, or the causal joint oracle of the team.
+class Team {
+ public:
+  Team(const common::ScenarioOptions& options, std::uint64_t seed, Estimators estimators,
+       const std::vector<std::pair<std::string, common::Pose2>>& frames) {
+    if (estimators == Estimators::kJointReference) {
+      joint_ = std::make_unique<JointOracle>(options, frames);
+      return;
+    }
+    for (std::size_t i = 0; i < options.robots.size(); ++i) {
+      own_.emplace_back(options, static_cast<int>(i), seed, estimators == Estimators::kReference);
+    }
+  }
+  void Process(const std::vector<common::SensorStep>& steps) {
+    if (joint_) joint_->Process(steps);
+    for (std::size_t i = 0; i < own_.size(); ++i) own_[i].Process(steps[i]);
+  }
+  Output Estimate(std::size_t i) const {
+    return joint_ ? OutputOf(joint_->Of(static_cast<int>(i))) : own_[i].Estimate();
+  }
+
+ private:
+  std::vector<Estimator> own_;
+  std::unique_ptr<JointOracle> joint_;
+};
+
 // One seed's metrics per robot (scenario order).
-std::vector<RobotRun> RunSeed(const common::ScenarioOptions& options, std::uint64_t seed, bool reference) {
+std::vector<RobotRun> RunSeed(const common::ScenarioOptions& options, std::uint64_t seed, Estimators estimators,
+                              bool progress) {
+  common::ProgressLine line;
+  const std::size_t last = options.robots.size() - 1;
+  const StepObserver observer = [&](std::size_t robot, const common::SensorStep& step, const evaluator::StepScore&) {
+    if (robot != last) return;
+    const int k = static_cast<int>(step.lidar.stamp.step);
+    line.Show("seed " + std::to_string(seed) + ": step " + std::to_string(k) + "/" + std::to_string(options.run.steps),
+              k == options.run.steps);
+  };
   std::vector<RobotRun> out;
-  for (const evaluator::RobotSummary& s : ScoreSeed(options, seed, reference)) {
+  for (const evaluator::RobotSummary& s : ScoreSeed(options, seed, estimators, progress ? observer : StepObserver{})) {
     out.push_back({s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m});
   }
   return out;
 }
 
+// The report's name of the estimators.
+std::string Describe(const common::ScenarioOptions& options, Estimators estimators) {
+  switch (estimators) {
+    case Estimators::kReference:
+      return "the MAP reference";
+    case Estimators::kJointReference:
+      return "the causal joint MAP reference";
+    default:
+      return options.filter.type + " with " + std::to_string(options.filter.particles) + " particles";
+  }
+}
+
 }  // namespace
 
-std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, std::uint64_t seed, bool reference,
-                                               const StepObserver& observer) {
+std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, std::uint64_t seed,
+                                               Estimators estimators, const StepObserver& observer) {
   options.seed = seed;
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
   const common::GroundTruth truth0 = source->Truth();
   const std::size_t n = options.robots.size();
-  std::vector<Estimator> estimators;
+  Team team(options, seed, estimators, truth0.frames);
   std::vector<evaluator::RobotScorer> scorers;
   for (std::size_t i = 0; i < n; ++i) {
-    estimators.emplace_back(options, static_cast<int>(i), seed, reference);
     const common::Pose2& frame = truth0.frames[i].second;
     scorers.emplace_back(frame, evaluator::TruthInOwnFrame(truth0.robots[i].pose, frame), options.sensors.lidar);
   }
   for (int k = 0; k < options.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();
     const common::GroundTruth truth = source->Truth();
+    team.Process(steps);
     for (std::size_t i = 0; i < n; ++i) {
-      estimators[i].Process(steps[i]);
-      const Estimator::Output e = estimators[i].Estimate();
+      const Output e = team.Estimate(i);
       const evaluator::StepScore score =
           scorers[i].Add(truth, truth.robots[i].pose, e.pose, e.covariance, e.map, &steps[i].odometry);
       if (observer) observer(i, steps[i], score);
@@ -109,16 +164,17 @@ std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, 
 }
 
 int PrintFilterAccuracy(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds, int threads,
-                        const std::string& json_path, bool reference) {
+                        const std::string& json_path, Estimators estimators) {
+  // Step progress when seeds run one at a time and take long (the joint reference).
+  const bool progress = threads == 1 && estimators == Estimators::kJointReference;
   std::vector<std::vector<RobotRun>> results(num_seeds);
-  ForEachSeed(num_seeds, threads, [&](int s) { results[s] = RunSeed(options, first_seed + s, reference); });
+  ForEachSeed(num_seeds, threads, [&](int s) { results[s] = RunSeed(options, first_seed + s, estimators, progress); });
 
-  const std::string estimator =
-      reference ? std::string("the MAP reference")
-                : options.filter.type + " with " + std::to_string(options.filter.particles) + " particles";
-  nlohmann::json json = StartReport(options, first_seed, num_seeds, estimator);
+  nlohmann::json json = StartReport(options, first_seed, num_seeds, Describe(options, estimators));
   json["particles"] = options.filter.particles;
-  json["filter"] = reference ? std::string("reference") : options.filter.type;
+  json["filter"] = estimators == Estimators::kOwnFilter        ? options.filter.type
+                   : estimators == Estimators::kJointReference ? std::string("joint reference")
+                                                               : std::string("reference");
   std::printf("%-6s %-24s %10s %10s\n", "robot", "metric", "median", "p90");
   for (std::size_t i = 0; i < options.robots.size(); ++i) {
     const std::string& id = options.robots[i].id;

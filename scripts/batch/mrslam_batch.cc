@@ -5,6 +5,8 @@
 //     (docs/metrics.md): filter_accuracy;
 //   --reference: the same with the approximately ideal filter (the oracle batch MAP smoother) in
 //     place of each robot's own, on the same data (the lidar reports identities): filter_accuracy;
+//     with --joint, the causal joint oracle: each robot's reference over its own data and what
+//     the robots it met (directly or through others) held then: filter_accuracy, joint_oracle;
 //   --transform-reference: per ordered pair of robots, the error of T(G_i <- G_j) at the end of
 //     their first encounter as the joint MAP reference holds it: transform_reference;
 //   --smoother: each robot's error under the MAP smoother of the whole run, jointly and alone:
@@ -13,7 +15,8 @@
 //     slip_recovery.
 //
 //   mrslam_batch --scenario FILE --seeds A..B [--set k=v]... [--particles N] [--threads T]
-//                [--reference | --transform-reference | --smoother | --slip-recovery] [--json FILE]
+//                [--reference [--joint] | --transform-reference | --smoother | --slip-recovery]
+//                [--json FILE]
 #include <cstdint>
 #include <cstdio>
 #include <stdexcept>
@@ -38,17 +41,22 @@ int Main(int argc, char** argv) {
   std::string scenario_path, seeds_text = "1..50", json_path;
   std::vector<std::string> overrides;
   int particles = 0, threads = 1;
-  bool reference = false, transform_reference = false, smoother = false, slip_recovery = false;
+  bool reference = false, joint = false, transform_reference = false, smoother = false, slip_recovery = false;
   app.add_option("--scenario", scenario_path, "Scenario YAML file")->required();
   app.add_option("--seeds", seeds_text, "Seed range A..B (inclusive)");
   app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
   app.add_option("--particles", particles, "Particles per filter (overrides filter.particles)")
       ->check(CLI::Range(1, 1000000));
   app.add_option("--threads", threads, "Seeds run in parallel")->check(CLI::Range(1, 256));
-  app.add_flag("--reference", reference,
-               "Run the approximately ideal reference instead of the filter: the batch MAP estimate of the "
-               "path so far at every step, with oracle association and landmark kinematics (static or "
-               "unicycle landmarks)");
+  auto* reference_flag =
+      app.add_flag("--reference", reference,
+                   "Run the approximately ideal reference instead of the filter: the batch MAP estimate of the "
+                   "path so far at every step, with oracle association and landmark kinematics (static or "
+                   "unicycle landmarks; with a landmark_field, its static landmarks)");
+  app.add_flag("--joint", joint,
+               "With --reference: the causal joint oracle, each robot's reference over its own data and, of "
+               "every robot it met directly or through others, the data held at the last contact")
+      ->needs(reference_flag);
   app.add_flag("--transform-reference", transform_reference,
                "Print instead the error of each pair's transform at the end of its first encounter as the "
                "joint MAP reference of both robots holds it");
@@ -75,7 +83,9 @@ int Main(int argc, char** argv) {
   if (transform_reference) return PrintTransformReference(options, first_seed, seeds.size(), threads, json_path);
   if (smoother) return PrintSmoother(options, first_seed, seeds.size(), threads, json_path);
   if (slip_recovery) return PrintSlipRecovery(options, first_seed, seeds.size(), threads, json_path);
-  return PrintFilterAccuracy(options, first_seed, seeds.size(), threads, json_path, reference);
+  const Estimators estimators =
+      joint ? Estimators::kJointReference : (reference ? Estimators::kReference : Estimators::kOwnFilter);
+  return PrintFilterAccuracy(options, first_seed, seeds.size(), threads, json_path, estimators);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <string>
 #include <utility>
 
+#include "common/angles.h"
 #include "common/config/agent_options_projection.h"
 #include "world_sim/core/world.h"
 
@@ -40,6 +41,13 @@ std::vector<BatchSmoother::RobotStart> OracleStarts(const common::ScenarioOption
     robots.push_back({robot.id, r == 0 ? common::InitialPoseInOwnFrame(robot) : first_pose_guesses[r - 1]});
   }
   return robots;
+}
+
+common::Pose2 FirstPoseGuess(const common::ScenarioOptions& scenario,
+                             const std::vector<std::pair<std::string, common::Pose2>>& frames, int i, int j) {
+  const common::Pose2 true_ij = common::Between(frames.at(i).second, frames.at(j).second);
+  return common::Compose(common::Compose(true_ij, common::InitialPoseInOwnFrame(scenario.robots.at(j))),
+                         {0.3, 0.3, common::kPi / 36});
 }
 
 BatchSmoother OracleSmoother(const common::ScenarioOptions& scenario, const std::vector<int>& robot_indices,

@@ -3,6 +3,8 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "common/config/scenario_options.h"
@@ -27,6 +29,12 @@ std::map<int, BatchSmoother::Kinematics> OracleKinematics(const common::Scenario
 std::vector<BatchSmoother::RobotStart> OracleStarts(const common::ScenarioOptions& scenario,
                                                     const std::vector<int>& robot_indices,
                                                     const std::vector<common::Pose2>& first_pose_guesses);
+
+// Robot j's first pose in robot i's frame G_i as the joint references start it: the truth
+// displaced by (0.3 m, 0.3 m, 5 deg), so that a result near that displacement would say the data
+// do not place it. frames: the truth's (common::GroundTruth::frames, scenario order).
+common::Pose2 FirstPoseGuess(const common::ScenarioOptions& scenario,
+                             const std::vector<std::pair<std::string, common::Pose2>>& frames, int i, int j);
 
 // The reference of several robots at once (the first anchors the frame) or, with one index and
 // no guesses, of one robot in its own frame. Detections of each other count from step

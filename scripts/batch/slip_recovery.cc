@@ -31,7 +31,7 @@ struct Trace {
 // Runs one seed with each robot's own filter and records every robot's errors.
 std::vector<Trace> RunTraces(const common::ScenarioOptions& options, std::uint64_t seed) {
   std::vector<Trace> traces(options.robots.size());
-  ScoreSeed(options, seed, /*reference=*/false,
+  ScoreSeed(options, seed, Estimators::kOwnFilter,
             [&](std::size_t i, const common::SensorStep& step, const evaluator::StepScore& s) {
               traces[i].position_err_m.push_back(s.position_err_m);
               traces[i].heading_err_deg.push_back(common::DegFromRad(s.heading_err_rad));

@@ -55,9 +55,7 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   for (int i = 0; i < n; ++i) {
     all.push_back(i);
     starts.push_back(common::InitialPoseInOwnFrame(options.robots[i]));
-    if (i == 0) continue;
-    const common::Pose2 true_0i = common::Between(frames[0].second, frames[i].second);
-    guesses.push_back(common::Compose(common::Compose(true_0i, starts[i]), {0.3, 0.3, common::kPi / 36}));
+    if (i > 0) guesses.push_back(FirstPoseGuess(options, frames, 0, i));
   }
   const auto statics = FieldStatics(options);
   const auto joint_ref = MakeOracleReference(options, statics, all, guesses, options.rendezvous.enable_from_step);

@@ -55,7 +55,7 @@ PairErrors RunTransformSeed(common::ScenarioOptions options, std::uint64_t seed,
   const common::Pose2 true_ij = common::Between(frames[i].second, frames[j].second);
   // T(G_i <- G_j) maps j's first pose in G_j to its first pose in G_i.
   const common::Pose2 start_j = common::InitialPoseInOwnFrame(options.robots[j]);
-  const common::Pose2 guess = common::Compose(common::Compose(true_ij, start_j), {0.3, 0.3, common::kPi / 36});
+  const common::Pose2 guess = FirstPoseGuess(options, frames, i, j);
   const auto statics = FieldStatics(options);
   const auto joint_ref = MakeOracleReference(options, statics, {i, j}, {guess}, options.rendezvous.enable_from_step);
   const auto own_i_ref = MakeOracleReference(options, statics, {i}, {}, 0);

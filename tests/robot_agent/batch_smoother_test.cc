@@ -118,6 +118,101 @@ TEST(BatchSmoother, PlacesASecondRobotFromTheDataNotFromItsGuess) {
   EXPECT_LT(std::abs(common::WrapAngle(reference.FirstPose(1).heading - truth.heading)), 1e-3);
 }
 
+// Two robots' sensor steps and true poses in the first robot's frame, steps 1..n.
+struct TwoRobotRun {
+  std::vector<std::vector<common::SensorStep>> steps{2};
+  std::vector<std::vector<common::Pose2>> truth{2};  // in G1
+  common::Pose2 first_pose_2;                        // r2's first pose in G1
+};
+TwoRobotRun RecordTwoRobots(const common::ScenarioOptions& o, int n) {
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
+  const auto frames = source->Truth().frames;
+  TwoRobotRun run;
+  run.first_pose_2 =
+      common::Compose(common::Between(frames[0].second, frames[1].second), common::InitialPoseInOwnFrame(o.robots[1]));
+  for (int k = 0; k < n; ++k) {
+    const std::vector<common::SensorStep> steps = source->Step();
+    const common::GroundTruth truth = source->Truth();
+    for (int r = 0; r < 2; ++r) {
+      run.steps[r].push_back(steps[r]);
+      run.truth[r].push_back(common::Compose(common::Inverse(frames[0].second), truth.robots[r].pose));
+    }
+  }
+  return run;
+}
+
+TEST(BatchSmoother, OneRobotAtATimeIsTheSameProblemWhenStepsAreEqual) {
+  // Add(r, step) for each robot in turn builds the problem Add(steps) builds: the same solution
+  // to the last bit, step by step.
+  const common::ScenarioOptions o = PaperScenario();
+  const TwoRobotRun run = RecordTwoRobots(o, 40);
+  const common::Pose2 guess = common::Compose(run.first_pose_2, {0.3, -0.4, 0.1});
+  BatchSmoother together = batch::OracleSmoother(o, {0, 1}, {guess}, 14);
+  BatchSmoother apart = batch::OracleSmoother(o, {0}, {}, 14);
+  ASSERT_EQ(apart.AddRobot({o.robots[1].id, guess}), 1);
+  for (int k = 0; k < 40; ++k) {
+    together.Process({run.steps[0][k], run.steps[1][k]});
+    apart.Add(0, run.steps[0][k]);
+    apart.Add(1, run.steps[1][k]);
+    apart.Solve();
+    for (int r = 0; r < 2; ++r) {
+      ASSERT_EQ(apart.Steps(r), k + 1);
+      EXPECT_EQ(apart.Pose(r).Vector(), together.Pose(r).Vector()) << "step " << k + 1;
+    }
+    ASSERT_EQ(apart.Landmarks().size(), together.Landmarks().size());
+    for (std::size_t l = 0; l < apart.Landmarks().size(); ++l) {
+      EXPECT_EQ(apart.Landmarks()[l].first, together.Landmarks()[l].first);
+    }
+  }
+}
+
+TEST(BatchSmoother, RobotsHoldingDifferentStepsAreExactWithoutNoise) {
+  // Noise a million times below the scenario's: r1 holds steps 1..20 and r2 steps 1..40 (its
+  // first pose started 0.5 m and 10 deg off; its landmark readings of steps 1..10 removed, so
+  // that it sights the moving landmarks later than r1), added one robot after the other in
+  // either order (r1 first: the landmarks' chains grow forward to r2's readings; r2 first:
+  // backward to r1's): every pose and landmark is the true one.
+  const common::ScenarioOptions o = PaperScenario(
+      {"noise.robot_process_var=[1e-12, 1e-12, 1e-12]", "noise.landmark_process_var=[1e-12, 1e-12, 1e-12]",
+       "sensors.lidar.range_noise_sd_m=1e-6", "sensors.lidar.bearing_noise_sd_rad=1e-6"});
+  TwoRobotRun run = RecordTwoRobots(o, 40);
+  for (int k = 0; k < 10; ++k) run.steps[1][k].lidar.landmarks.clear();
+  const int held[2] = {20, 40};
+  for (const bool first_robot_first : {true, false}) {
+    BatchSmoother reference =
+        batch::OracleSmoother(o, {0, 1}, {common::Compose(run.first_pose_2, {0.3, -0.4, 0.17})}, 14);
+    for (const int r : first_robot_first ? std::vector<int>{0, 1} : std::vector<int>{1, 0}) {
+      for (int k = 0; k < held[r]; ++k) {
+        reference.Add(r, run.steps[r][k]);
+        if ((k + 1) % 5 == 0) reference.Solve();
+      }
+    }
+    reference.Solve();
+    for (int r = 0; r < 2; ++r) {
+      ASSERT_EQ(reference.Steps(r), held[r]);
+      const std::vector<common::Pose2>& path = reference.Path(r);
+      for (int t = 1; t <= held[r]; ++t) {
+        EXPECT_LT((path[t].Translation() - run.truth[r][t - 1].Translation()).norm(), 1e-3)
+            << "robot " << r << " step " << t << (first_robot_first ? "" : ", r2's data first");
+      }
+    }
+    EXPECT_LT((reference.FirstPose(1).Translation() - run.first_pose_2.Translation()).norm(), 1e-3);
+    const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
+    const auto frame = source->Truth().frames[0].second;
+    for (int k = 0; k < 40; ++k) source->Step();
+    const common::GroundTruth truth = source->Truth();
+    int scored = 0;
+    for (const auto& [position, id] : reference.Landmarks()) {
+      for (const auto& l : truth.landmarks) {
+        if (std::stoi(l.id) != id) continue;
+        EXPECT_LT((position - common::Compose(common::Inverse(frame), l.pose).Translation()).norm(), 1e-3) << id;
+        ++scored;
+      }
+    }
+    EXPECT_GT(scored, 0);
+  }
+}
+
 TEST(BatchSmoother, FirstPoseCovarianceCoversTheError) {
   // With the scenario's noise: the second robot's first pose against the truth, whitened by the
   // covariance the solver reports, over seeds.
