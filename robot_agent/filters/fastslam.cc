@@ -73,6 +73,7 @@ double HeadingCovOf(const LandmarkBlock<D>& b, int i, int l) {  // cov(i, headin
 
 // One track's weighted sums over the particles that hold it (FastSlam::MapEstimate).
 struct TrackAccumulator {
+  std::uint32_t id = 0;
   double weight = 0.0, heading_weight = 0.0, tentative_weight = 0.0, moving_weight = 0.0;
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();
   double c = 0.0, s = 0.0, v = 0.0, v_var = 0.0, w = 0.0;
@@ -105,6 +106,34 @@ MapLandmark TrackLandmark(std::uint32_t id, const TrackAccumulator& a, int dim) 
   m.tentative = a.tentative_weight > 0.5 * a.weight;
   return m;
 }
+
+// The accumulators of MapEstimate, one per track id in the order first met (tracks()), and
+// which one a landmark adds to. Visited particle after particle, slot after slot, a landmark's
+// track is mostly the one the previous particle holds at the same slot (the particles descend
+// from few ancestors); it is looked up by id only when that differs.
+class TrackTable {
+ public:
+  // The index in tracks() of the track of the landmark with track id `id` at `slot`.
+  int Find(int slot, std::uint32_t id) {
+    if (static_cast<int>(at_slot_.size()) <= slot) at_slot_.resize(slot + 1, -1);
+    int& t = at_slot_[slot];
+    if (t < 0 || tracks_[t].id != id) t = Lookup(id);
+    return t;
+  }
+  std::vector<TrackAccumulator>& tracks() { return tracks_; }
+
+ private:
+  // The track of id, added if new (the rare path: kept out of the visiting loops).
+  __attribute__((noinline)) int Lookup(std::uint32_t id) {
+    const auto [it, added] = by_id_.try_emplace(id, static_cast<int>(tracks_.size()));
+    if (added) tracks_.emplace_back().id = id;
+    return it->second;
+  }
+
+  std::vector<TrackAccumulator> tracks_;
+  std::map<std::uint32_t, int> by_id_;
+  std::vector<int> at_slot_;  // per slot, the track of the last landmark found there
+};
 
 }  // namespace
 
@@ -190,6 +219,7 @@ void FastSlam<D>::MotionFromStep(const common::SensorStep& step, std::vector<Seg
 
 template <int D>
 void FastSlam<D>::Process(const common::SensorStep& step) {
+  map_estimate_.value.reset();
   step_ = step.lidar.stamp.step;
   time_s_ = step.lidar.stamp.time_s;
   std::vector<Segment> segments;
@@ -723,7 +753,8 @@ FilterEstimate FastSlam<D>::Estimate() const {
   e.covariance = pose_covariance_;
   e.labels_detections = true;
   e.detection_tracks = detection_tracks_;
-  e.landmarks = MapEstimate();
+  if (!map_estimate_.value) map_estimate_.value = MapEstimate();
+  e.landmarks = *map_estimate_.value;
   return e;
 }
 
@@ -735,17 +766,21 @@ std::vector<MapLandmark> FastSlam<D>::MapEstimate() const {
     w[p] = std::exp(log_weights_[p]);
     sw += w[p];
   }
-  // Per track id, the weight of its holders and weighted sums (see the class comment).
-  std::map<std::uint32_t, TrackAccumulator> tracks;
+  // Per track id, the weight of its holders and weighted sums (see the class comment), each
+  // summed in the order of the particles and their slots.
+  TrackTable table;
   auto for_each_landmark = [&](auto&& fn) {
     for (int p = 0; p < NumParticles(); ++p) {
       const Particle& particle = particles_[p];
-      for (int s = 0; s < particle.count; ++s) fn(w[p], *particle.blocks[s / kLanes], s % kLanes);
+      for (int s = 0; s < particle.count; ++s) {
+        const Block& b = *particle.blocks[s / kLanes];
+        const int l = s % kLanes;
+        fn(w[p], b, l, table.tracks()[table.Find(s, b.meta[l].track_id)]);
+      }
     }
   };
   auto has_heading = [](const Block& b, int l) { return D > 2 && !b.meta[l].position_only; };
-  for_each_landmark([&](double wp, const Block& b, int l) {
-    TrackAccumulator& a = tracks[b.meta[l].track_id];
+  for_each_landmark([&](double wp, const Block& b, int l, TrackAccumulator& a) {
     a.weight += wp;
     a.xy += wp * Eigen::Vector2d(b.Mean(0, l), b.Mean(1, l));
     if (b.meta[l].sightings < filter_.confirm_sightings) a.tentative_weight += wp;
@@ -764,13 +799,12 @@ std::vector<MapLandmark> FastSlam<D>::MapEstimate() const {
       a.w += wp * TurnRateOf(b, l);
     }
   });
-  for (auto& [id, a] : tracks) {
+  for (TrackAccumulator& a : table.tracks()) {
     a.out.first_seen_step = a.first_seen;
     a.out.mean.template head<2>() = a.xy / a.weight;
     a.out.mean(2) = a.heading_weight > 0.0 ? std::atan2(a.s, a.c) : 0.0;
   }
-  for_each_landmark([&](double wp, const Block& b, int l) {
-    TrackAccumulator& a = tracks[b.meta[l].track_id];
+  for_each_landmark([&](double wp, const Block& b, int l, TrackAccumulator& a) {
     const Eigen::Vector2d d(b.Mean(0, l) - a.out.mean(0), b.Mean(1, l) - a.out.mean(1));
     Eigen::Matrix2d p;
     p << b.Cov(0, 0, l), b.Cov(0, 1, l), b.Cov(0, 1, l), b.Cov(1, 1, l);
@@ -783,11 +817,12 @@ std::vector<MapLandmark> FastSlam<D>::MapEstimate() const {
       a.second(1, 2) += wh * (HeadingCovOf(b, 1, l) + d.y() * dh);
     }
   });
-  std::vector<MapLandmark> map;
-  for (const auto& [id, a] : tracks) {
+  std::vector<MapLandmark> map;  // by track id
+  for (const TrackAccumulator& a : table.tracks()) {
     if (a.weight <= 0.5 * sw) continue;  // held by at most half of the weight
-    map.push_back(TrackLandmark(id, a, D));
+    map.push_back(TrackLandmark(a.id, a, D));
   }
+  std::sort(map.begin(), map.end(), [](const MapLandmark& a, const MapLandmark& b) { return a.track_id < b.track_id; });
   return map;
 }
 
@@ -795,6 +830,7 @@ template <int D>
 int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, MapFusionRule rule, double gate_probability,
                                 double too_close_m) {
   if (in.empty()) return 0;
+  map_estimate_.value.reset();
   const double gate = common::ChiSquare2Quantile(gate_probability);
   // A peer heading is used when it is known better than half the uniform variance.
   const auto heading_known = [](const Eigen::Matrix3d& c) { return c(2, 2) < 0.5 * kUnknownHeadingVar; };
@@ -966,6 +1002,7 @@ bool FastSlam<D>::ObserveKnownRobot(const Eigen::Vector2d& position, const Eigen
   const Innovation at_mean = innovation(pose_);
   const Eigen::Matrix2d s_mean = at_mean.s + at_mean.hx * pose_covariance_ * at_mean.hx.transpose();
   if (!(at_mean.nu.dot(s_mean.ldlt().solve(at_mean.nu)) <= gate)) return false;
+  map_estimate_.value.reset();
   for (int p = 0; p < NumParticles(); ++p) {
     const Innovation z = innovation(particles_[p].pose);
     log_weights_[p] += common::LogGaussian2(z.nu, z.s);

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -75,9 +76,15 @@ namespace mrslam::robot_agent::filters {
 // predicted to the current step (every landmark is predicted every step); its motion is static
 // (constant turn rate) when the holders taking it as static carry more than half of their
 // weight. Each detection's track (FilterEstimate::detection_tracks) is the association of the
-// particle of largest weight before resampling.
+// particle of largest weight before resampling. The sums run particle after particle, slot after
+// slot, in that order only. Every reading changes every particle's weight, so the map is not
+// updated in place across steps (that would reorder the sums): it is computed once after each
+// change of the particles or weights and kept until the next (map_estimate_); each landmark finds
+// its track's sums through the track the previous particle holds at the same slot, by id only
+// when that differs.
 //
-// Owns its particles, its random stream (derived from (seed, robot id)) and scratch buffers.
+// Owns its particles, its random stream (derived from (seed, robot id)), scratch buffers and one
+// cache (map_estimate_, derived from the particles and weights).
 // Not thread-safe; pure (no DDS, no wall clock).
 template <int D>
 class FastSlam : public SlamFilter {
@@ -182,7 +189,8 @@ class FastSlam : public SlamFilter {
   void Resample(const std::vector<double>& weights);
   void IoParticles(common::Archive& ar);
   void EstimatePose(const std::vector<double>& weights);
-  // The map of the estimate: every track held by more than half of the weight.
+  // The map of the estimate: every track held by more than half of the weight, computed from
+  // the particles and weights (Estimate keeps it in map_estimate_ until they change).
   std::vector<MapLandmark> MapEstimate() const;
 
   Block* MutableBlock(Particle* particle, int b);
@@ -245,6 +253,21 @@ class FastSlam : public SlamFilter {
   // Per particle and sorted detection of this step: the track it was matched to or created (0: none).
   std::vector<std::uint32_t> detection_labels_;
   std::vector<std::uint32_t> detection_tracks_;  // the most probable particle's, in scan order
+
+  // A cache, derived from particles_ and log_weights_ alone: the map of the last Estimate, empty
+  // until Estimate fills it. Whatever changes particles_ or log_weights_ (Process,
+  // MergeLandmarks, ObserveKnownRobot, and any future restore of the filter's state) empties it;
+  // a copy of the filter starts without it (rebuilt on demand).
+  struct MapCache {
+    MapCache() = default;
+    MapCache(const MapCache& /*other*/) {}
+    MapCache& operator=(const MapCache& /*other*/) {
+      value.reset();
+      return *this;
+    }
+    std::optional<std::vector<MapLandmark>> value;
+  };
+  mutable MapCache map_estimate_;
 
   // Scratch.
   std::vector<double> d2_;

@@ -58,23 +58,70 @@ MRSLAM_LANE_INLINE void UpdateTargets(LandmarkBlock<D>* const* blocks, const int
   }
 }
 
+// The update kernel over whole blocks: field f of a block is one contiguous row of kLanes
+// values, as is each of its inputs (UpdateBatch::WholeInputs); each row is loaded and stored kW
+// lanes at a time. The fields of the blocks kAhead on are requested in advance.
+template <typename T, int D>
+MRSLAM_LANE_INLINE void UpdateWholeBlocks(LandmarkBlock<D>* const* blocks,
+                                          const typename UpdateBatch<D>::WholeInputs* in, int n, double var_r,
+                                          double var_b) {
+  constexpr int kW = sizeof(T) / sizeof(double);
+  constexpr int kState = D + TriangleSize(D);
+  constexpr int kInputs = UpdateBatch<D>::kInputs;
+  constexpr int kAhead = 2;
+  for (int e = 0; e < n; ++e) {
+    if (e + kAhead < n) {
+#pragma GCC unroll 16
+      for (int f = 0; f < kState; ++f) __builtin_prefetch(&blocks[e + kAhead]->field[f][0]);
+    }
+    LandmarkBlock<D>& block = *blocks[e];
+#pragma GCC unroll 8
+    for (int l = 0; l < kLanes; l += kW) {
+      T state[kState], pose_z[kInputs];
+#pragma GCC unroll 16
+      for (int f = 0; f < kState; ++f) std::memcpy(&state[f], &block.field[f][l], sizeof(T));
+#pragma GCC unroll 16
+      for (int i = 0; i < kInputs; ++i) std::memcpy(&pose_z[i], &in[e].row[i][l], sizeof(T));
+      EkfUpdate<T, D>(state, state + D, pose_z[0], pose_z[1], pose_z[2], pose_z[3], pose_z[4], var_r, var_b);
+#pragma GCC unroll 16
+      for (int f = 0; f < kState; ++f) std::memcpy(&block.field[f][l], &state[f], sizeof(T));
+    }
+  }
+}
+
+// What UpdateBatch::Run hands its kernel: n single lanes (blocks, lanes, input rows in) and
+// whole_n whole blocks (whole, input rows whole_in).
 template <int D>
-void UpdateTargetsSse2(LandmarkBlock<D>* const* blocks, const int* lanes, const double* const* in, int n, double var_r,
-                       double var_b) {
-  UpdateTargets<Double2, D>(blocks, lanes, in, n, var_r, var_b);
+struct QueuedUpdates {
+  LandmarkBlock<D>* const* blocks;
+  const int* lanes;
+  const double* const* in;
+  int n;
+  LandmarkBlock<D>* const* whole;
+  const typename UpdateBatch<D>::WholeInputs* whole_in;
+  int whole_n;
+  double var_r, var_b;
+};
+
+template <typename T, int D>
+MRSLAM_LANE_INLINE void UpdateQueued(const QueuedUpdates<D>& q) {
+  UpdateWholeBlocks<T, D>(q.whole, q.whole_in, q.whole_n, q.var_r, q.var_b);
+  UpdateTargets<T, D>(q.blocks, q.lanes, q.in, q.n, q.var_r, q.var_b);
+}
+
+template <int D>
+void UpdateQueuedSse2(const QueuedUpdates<D>& q) {
+  UpdateQueued<Double2, D>(q);
 }
 
 #if defined(__x86_64__)
 template <int D>
-__attribute__((target("avx2"))) void UpdateTargetsAvx2(LandmarkBlock<D>* const* blocks, const int* lanes,
-                                                       const double* const* in, int n, double var_r, double var_b) {
-  UpdateTargets<Double4, D>(blocks, lanes, in, n, var_r, var_b);
+__attribute__((target("avx2"))) void UpdateQueuedAvx2(const QueuedUpdates<D>& q) {
+  UpdateQueued<Double4, D>(q);
 }
 template <int D>
-__attribute__((target("avx512f"))) void UpdateTargetsAvx512(LandmarkBlock<D>* const* blocks, const int* lanes,
-                                                            const double* const* in, int n, double var_r,
-                                                            double var_b) {
-  UpdateTargets<Double8, D>(blocks, lanes, in, n, var_r, var_b);
+__attribute__((target("avx512f"))) void UpdateQueuedAvx512(const QueuedUpdates<D>& q) {
+  UpdateQueued<Double8, D>(q);
 }
 
 // The widest vector unit of this CPU, found once.
@@ -330,12 +377,24 @@ UpdateBatch<D>::UpdateBatch(double var_r, double var_b)
       var_b_(var_b),
       blocks_(kFlushSize),
       lanes_(kFlushSize),
-      rows_(static_cast<std::size_t>(kInputs) * kRowStride) {}
+      rows_(static_cast<std::size_t>(kInputs) * kRowStride),
+      whole_(kFlushBlocks),
+      whole_inputs_(kFlushBlocks) {}
+
+template <int D>
+void UpdateBatch<D>::SpillRun() {
+  if (open_lanes_ == 0) return;
+  const WholeInputs& open = whole_inputs_[whole_size_];
+  for (int l = 0; l < open_lanes_; ++l) {
+    AddSingle(whole_[whole_size_], l, {open.row[0][l], open.row[1][l], open.row[2][l]}, open.row[3][l], open.row[4][l]);
+  }
+  open_lanes_ = 0;
+}
 
 template <int D>
 void UpdateBatch<D>::Run() {
+  SpillRun();
   const int n = size_;
-  if (n == 0) return;
   // Input lanes up to a multiple of 8 repeat the last update (the kernels do not store them).
   const int padded = (n + 7) / 8 * 8;
   for (int k = n; k < padded; ++k) {
@@ -343,18 +402,21 @@ void UpdateBatch<D>::Run() {
   }
   const double* in[kInputs];
   for (int i = 0; i < kInputs; ++i) in[i] = &Input(i, 0);
+  const QueuedUpdates<D> q{blocks_.data(),       lanes_.data(), in,     n,     whole_.data(),
+                           whole_inputs_.data(), whole_size_,   var_r_, var_b_};
   size_ = 0;
+  whole_size_ = 0;
 #if defined(__x86_64__)
   switch (Widest()) {
     case Simd::kAvx512:
-      return UpdateTargetsAvx512<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
+      return UpdateQueuedAvx512<D>(q);
     case Simd::kAvx2:
-      return UpdateTargetsAvx2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
+      return UpdateQueuedAvx2<D>(q);
     case Simd::kSse2:
       break;
   }
 #endif
-  UpdateTargetsSse2<D>(blocks_.data(), lanes_.data(), in, n, var_r_, var_b_);
+  UpdateQueuedSse2<D>(q);
 }
 
 #define MRSLAM_INSTANTIATE_EKF(D)                                                                                \

@@ -344,37 +344,56 @@ void GateBlock(const LandmarkBlock<D>& block, int count, const common::Pose2& po
                double z_r, double z_b, double var_r, double var_b, bool euclidean, double* d2);
 
 // A batch of landmark EKF updates across particles: queues each (block, lane, pose, z), then
-// runs EkfUpdate eight, four or two lanes at a time (AVX-512F, AVX2, SSE2), loading each lane's state from its
-// block into a vector register and storing the result straight back. The filter queues every
-// update of a step here; the blocks must stay alive and not move until Run. A lane may be queued
-// at most once per Run. Add runs the batch by itself every kFlushSize updates, which keeps the
-// queued inputs in cache.
+// runs EkfUpdate eight, four or two lanes at a time (AVX-512F, AVX2, SSE2). A block whose kLanes
+// lanes are queued one after the other in lane order (a whole block) is updated as it lies: each
+// of its fields is one contiguous row, loaded into vector registers and stored back as such, and
+// its inputs are queued as rows of kLanes values beside it. The other updates (single lanes) load
+// each lane's state from its block into a vector register lane by lane and store the result
+// straight back. Both run the same EkfUpdate on each lane, so the numbers depend neither on the
+// path nor on the vector width. The filter queues every update of a step here; the blocks must
+// stay alive and not move until Run. A lane may be queued at most once per Run. Add runs the
+// batch by itself when about kFlushSize updates are queued, which keeps the inputs in cache.
 template <int D>
 class UpdateBatch {
  public:
+  static constexpr int kInputs = 5;  // xr, yr, phi, z_r, z_b
+  // The inputs of one whole block, row i = input i of lanes 0..kLanes-1.
+  struct alignas(64) WholeInputs {
+    double row[kInputs][kLanes];
+  };
+
   UpdateBatch(double var_r, double var_b);
   void Add(LandmarkBlock<D>* block, int lane, const common::Pose2& pose, double z_r, double z_b);
   void Run();
-  int size() const { return size_; }
+  int size() const { return size_ + kLanes * whole_size_ + open_lanes_; }
 
  private:
-  static constexpr int kInputs = 5;        // xr, yr, phi, z_r, z_b
   static constexpr int kFlushSize = 1024;  // a multiple of 8: padding lanes fit in the stride
+  static constexpr int kFlushBlocks = kFlushSize / kLanes;
   // Rows of kFlushSize values, one cache line apart beyond a multiple of 4 KiB so that the rows
   // do not all fall into one L1 set.
   static constexpr int kRowStride = kFlushSize + 8;
   double& Input(int i, int k) { return rows_[static_cast<std::size_t>(i) * kRowStride + k]; }
+  void AddSingle(LandmarkBlock<D>* block, int lane, const common::Pose2& pose, double z_r, double z_b);
+  // The open run (lanes 0..open_lanes_-1 of whole_[whole_size_], not yet a whole block) becomes
+  // single updates.
+  void SpillRun();
 
   double var_r_, var_b_;
-  int size_ = 0;
+  int size_ = 0;                           // single lanes queued
   std::vector<LandmarkBlock<D>*> blocks_;  // kFlushSize
   std::vector<int> lanes_;                 // kFlushSize
   std::vector<double> rows_;               // kInputs input rows
+  int whole_size_ = 0;                     // whole blocks queued
+  int open_lanes_ = 0;                     // lanes of the next whole block queued so far
+  std::vector<LandmarkBlock<D>*> whole_;   // kFlushBlocks
+  std::vector<WholeInputs> whole_inputs_;  // kFlushBlocks
 };
 
 template <int D>
-inline void UpdateBatch<D>::Add(LandmarkBlock<D>* block, int lane, const common::Pose2& pose, double z_r, double z_b) {
-  const int k = size_;
+inline void UpdateBatch<D>::AddSingle(LandmarkBlock<D>* block, int lane, const common::Pose2& pose, double z_r,
+                                      double z_b) {
+  const int k = size_++;
   blocks_[k] = block;
   lanes_[k] = lane;
   Input(0, k) = pose.x;
@@ -382,7 +401,30 @@ inline void UpdateBatch<D>::Add(LandmarkBlock<D>* block, int lane, const common:
   Input(2, k) = pose.heading;
   Input(3, k) = z_r;
   Input(4, k) = z_b;
-  if (++size_ == kFlushSize) Run();
+}
+
+template <int D>
+inline void UpdateBatch<D>::Add(LandmarkBlock<D>* block, int lane, const common::Pose2& pose, double z_r, double z_b) {
+  // Lane l of the block whose lanes 0..l-1 came just before continues the open run; lane 0 opens
+  // one; anything else ends it.
+  if (lane != open_lanes_ || (lane > 0 && block != whole_[whole_size_])) SpillRun();
+  if (lane == open_lanes_) {
+    whole_[whole_size_] = block;
+    double(&row)[kInputs][kLanes] = whole_inputs_[whole_size_].row;
+    row[0][lane] = pose.x;
+    row[1][lane] = pose.y;
+    row[2][lane] = pose.heading;
+    row[3][lane] = z_r;
+    row[4][lane] = z_b;
+    if (++open_lanes_ == kLanes) {
+      ++whole_size_;
+      open_lanes_ = 0;
+    }
+  } else {
+    AddSingle(block, lane, pose, z_r, z_b);
+  }
+  // Room for a spilled run and one more update.
+  if (size_ > kFlushSize - kLanes || whole_size_ == kFlushBlocks) Run();
 }
 
 }  // namespace mrslam::robot_agent::filters

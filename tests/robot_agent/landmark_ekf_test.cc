@@ -1,6 +1,8 @@
 #include "robot_agent/filters/landmark_ekf.h"
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
@@ -199,6 +201,74 @@ void CheckUpdate() {
 TEST(EkfUpdate, StaticMatchesEigenReference) { CheckUpdate<2>(); }
 TEST(EkfUpdate, UnicycleMatchesEigenReference) { CheckUpdate<3>(); }
 TEST(EkfUpdate, ConstantTurnRateMatchesEigenReference) { CheckUpdate<5>(); }
+
+// The batch's two paths (whole blocks queued in lane order, updated row by row; single lanes,
+// loaded lane by lane) give each lane exactly what EkfUpdate gives it one landmark at a time:
+// whole blocks, runs cut short (lanes 0..4), lanes in reverse order, a random sample of lanes
+// queued in random order between the others, over enough blocks that Add runs the batch by
+// itself in the middle of a run. Lanes not queued stay as they were.
+template <int D>
+void CheckBatchPaths() {
+  using Block = LandmarkBlock<D>;
+  constexpr int kState = D + TriangleSize(D);
+  common::Rng rng(7, "batch");
+  const double var_r = 0.01, var_b = 0.001;
+  const int num_blocks = 301;
+  std::vector<Block> blocks(num_blocks);
+  std::vector<common::Pose2> poses(static_cast<std::size_t>(num_blocks) * kLanes);
+  std::vector<Eigen::Vector2d> zs(poses.size());
+  for (int b = 0; b < num_blocks; ++b) {
+    for (int l = 0; l < kLanes; ++l) {
+      const int k = b * kLanes + l;
+      poses[k] = RandomPose(&rng);
+      StateVector<D> m = RandomState<D>(&rng);
+      m.template head<2>() = RandomPointAwayFrom(poses[k], &rng);
+      blocks[b].Set(l, m, RandomCovariance<D>(&rng, 0.05));
+      zs[k] = Measure(poses[k], m.template head<2>() + Eigen::Vector2d(rng.Normal(0, 0.2), rng.Normal(0, 0.2)));
+    }
+  }
+  std::vector<int> order, scattered;  // updates as block * kLanes + lane
+  for (int b = 0; b < num_blocks; ++b) {
+    for (int l = 0; l < kLanes; ++l) {
+      const int kind = b % 4;
+      const int lane = kind == 2 ? kLanes - 1 - l : l;
+      if (kind == 3 || (kind == 1 && l >= 5)) {
+        if (rng.Uniform() < 0.5) scattered.push_back(b * kLanes + lane);
+      } else {
+        order.push_back(b * kLanes + lane);
+      }
+    }
+    if (b % 8 == 7) {  // the scattered lanes so far, shuffled, between the runs
+      for (int i = static_cast<int>(scattered.size()) - 1; i > 0; --i) {
+        std::swap(scattered[i], scattered[static_cast<int>(rng.Uniform() * (i + 1))]);
+      }
+      order.insert(order.end(), scattered.begin(), scattered.end());
+      scattered.clear();
+    }
+  }
+  std::vector<Block> expected = blocks;
+  UpdateBatch<D> batch(var_r, var_b);
+  for (const int k : order) {
+    const int b = k / kLanes, l = k % kLanes;
+    batch.Add(&blocks[b], l, poses[k], zs[k](0), zs[k](1));
+    double state[kState];
+    for (int f = 0; f < kState; ++f) state[f] = expected[b].field[f][l];
+    EkfUpdate<double, D>(state, state + D, poses[k].x, poses[k].y, poses[k].heading, zs[k](0), zs[k](1), var_r, var_b);
+    for (int f = 0; f < kState; ++f) expected[b].field[f][l] = state[f];
+  }
+  batch.Run();
+  EXPECT_EQ(batch.size(), 0);
+  for (int b = 0; b < num_blocks; ++b) {
+    for (int f = 0; f < Block::kFields; ++f) {
+      for (int l = 0; l < kLanes; ++l) {
+        ASSERT_EQ(blocks[b].field[f][l], expected[b].field[f][l]) << "block " << b << " field " << f << " lane " << l;
+      }
+    }
+  }
+}
+TEST(UpdateBatch, StaticWholeBlocksAndSingleLanesEqualOneByOne) { CheckBatchPaths<2>(); }
+TEST(UpdateBatch, UnicycleWholeBlocksAndSingleLanesEqualOneByOne) { CheckBatchPaths<3>(); }
+TEST(UpdateBatch, ConstantTurnRateWholeBlocksAndSingleLanesEqualOneByOne) { CheckBatchPaths<5>(); }
 
 // The gate's squared Mahalanobis distance equals nu^T S^-1 nu with
 // S = H_m P H_m^T + H_x Sigma H_x^T + R.
