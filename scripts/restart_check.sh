@@ -4,9 +4,8 @@
 # second run; checks that the second run completes, that its numbers (summary.json without times,
 # metrics.csv) equal the first's, that the summary counts one restart, and that nothing the run
 # made is left in /dev/shm once the launcher has exited.
-# The victim is killed once the launcher's progress shows a step drawn at random in the first 90%
-# of the run (the progress is printed every 2 s, so the kill comes up to about 2 s later; the
-# launcher says after which step the agent died).
+# The victim is killed at a moment drawn at random between 10% and 80% of the uninterrupted run's
+# wall time after the launcher started (the launcher says after which step the agent died).
 # With --realtime FACTOR both runs are in realtime mode at that factor: the numbers cannot be
 # identical, so a seed passes instead when the victim is back at the newest step within 2 s of its
 # restart and its position RMSE from 50 steps after it is back to the end is within 2x the
@@ -35,7 +34,6 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 python=/usr/bin/python3
-steps=$("$python" -c "import yaml,sys; print(yaml.safe_load(open(sys.argv[1]))['run']['steps'])" "$scenario")
 robots=($("$python" -c "import yaml,sys; print(' '.join(r['id'] for r in yaml.safe_load(open(sys.argv[1]))['robots']))" "$scenario"))
 mkdir -p "$out"
 RANDOM=$draw  # the draw of victims and steps is reproducible
@@ -81,26 +79,14 @@ unheld_shm_of_domain() {
   done
 }
 
-# Waits until the launcher's progress (its log, every 2 s off a terminal) shows step $2 or more;
-# false if the launcher $1 ended first.
-wait_for_step() {
-  local log=$3 step
-  while kill -0 "$1" 2>/dev/null; do
-    step=$(grep -o '^step [0-9]*/' "$log" 2>/dev/null | tail -1 | tr -dc '0-9')
-    [[ -n $step && $step -ge $2 ]] && return 0
-    sleep 0.1
-  done
-  return 1
-}
-
 failures=0
 check=identical
 [[ ${#mode[@]} -gt 0 ]] && check=error_ratio
-printf 'seed robot drawn_step killed_after_step completed %s restarts comeback_s shm_left\n' "$check" |
+printf 'seed robot drawn_s killed_after_step completed %s restarts comeback_s shm_left\n' "$check" |
   tee "$out/table.txt"
 for ((seed = 1; seed <= seeds; ++seed)); do
   victim=${robots[$((RANDOM % ${#robots[@]}))]}
-  drawn=$((1 + RANDOM % (steps * 9 / 10)))
+  permille=$((100 + RANDOM % 701))
   plain=$out/plain/seed-$seed
   again=$out/restart/seed-$seed
   rm -rf "$plain" "$again"
@@ -110,13 +96,14 @@ for ((seed = 1; seed <= seeds; ++seed)); do
   "$bin/mrslam_launch" --scenario "$scenario" --seed "$seed" --out "$again" --no-plots --restart 1 "${shm[@]}" \
     "${mode[@]}" >"$again/launch.log" 2>&1 &
   launcher=$!
+  drawn=$("$python" -c "import json,sys; print('%.2f' % (json.load(open(sys.argv[1]))['wall_seconds'] * int(sys.argv[2]) / 1000))" \
+    "$plain/summary.json" "$permille")
+  sleep "$drawn"
   pid=""
-  if wait_for_step "$launcher" "$drawn" "$again/launch.log"; then
-    for child in $(pgrep -P "$launcher" || true); do
-      if tr '\0' ' ' <"/proc/$child/cmdline" 2>/dev/null | grep -q -- "--robot $victim "; then pid=$child; fi
-    done
-  fi
-  [[ -n $pid ]] && kill -9 "$pid"
+  for child in $(pgrep -P "$launcher" || true); do
+    if tr '\0' ' ' <"/proc/$child/cmdline" 2>/dev/null | grep -q -- "--robot $victim "; then pid=$child; fi
+  done
+  if [[ -n $pid ]]; then kill -9 "$pid" 2>/dev/null || pid=""; fi
   completed=yes
   wait "$launcher" || completed=no
   domain=$(grep -o 'DDS domain [0-9]*' "$again/launch.log" | head -1 | tr -dc '0-9')

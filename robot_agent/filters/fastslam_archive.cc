@@ -13,6 +13,7 @@ void FastSlam<D>::Io(common::Archive& ar) {
   ar(rng_, log_weights_, last_ess_, pose_, pose_covariance_, step_, time_s_, imu_step_, imu_speed_change_,
      imu_speed_var_, calibration_, next_track_id_, creation_ids_, detection_labels_, detection_tracks_);
   IoParticles(ar);
+  if (ar.loading()) map_estimate_.value.reset();  // a cache of the particles it held before
 }
 
 // The distinct landmark blocks first, each once, then per particle its pose, speed, landmark
