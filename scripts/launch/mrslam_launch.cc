@@ -349,6 +349,11 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     viewer = std::make_unique<RunViewer>(run, *flags.view_port, dir + "/logs/mrslam_view.log");
     view_readers = viewer->Join(monitor.get(), stop);
   }
+  if (stop) {  // interrupted while the evaluator (or the viewer) joined: start nothing more
+    std::cerr << kName << ": interrupted: stopping " << JoinNames(children.RunningNames()) << "\n";
+    children.StopAll(kStopGrace);
+    return kStopped;
+  }
   // Then the agents, then the simulator (it waits for every agent's "ready"). The evaluator (and
   // the progress monitor and the viewer) must read every estimate: the agents wait for them.
   StartSimulation(&children, run, robot_ids, (monitor ? 2 : 1) + view_readers, 1 + view_readers, dir + "/logs/");
@@ -394,9 +399,10 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
                         [&](const ChildExit& e) { return FinishedBeforeItDied(e, last_progress, total_steps); }};
   const RunEnd end = SuperviseRun(&children, limits, stop, show_progress, restart);
   printer.Finish();
+  // The children are stopped first: the monitor's participant takes a while to leave a large run.
+  if (end.kind != RunEnd::Kind::kDone) ReportEnd(end, limits, &children, dir);
   const bool monitor_joined = monitor != nullptr;
   monitor.reset();
-  if (end.kind != RunEnd::Kind::kDone) ReportEnd(end, limits, &children, dir);
   if (run.shared_memory) RemoveShmFiles(domain);
   if (end.kind != RunEnd::Kind::kDone) {
     if (end.kind == RunEnd::Kind::kStopped) return kStopped;
