@@ -9,7 +9,8 @@
 # With --realtime FACTOR both runs are in realtime mode at that factor: the numbers cannot be
 # identical, so a seed passes instead when the victim is back at the newest step within 2 s of its
 # restart and its position RMSE from 50 steps after it is back to the end is within 2x the
-# uninterrupted run's over the same steps.
+# uninterrupted run's over the same steps (n/a, not counted against it, when the run ended within
+# those 50 steps).
 # Usage: scripts/restart_check.sh [--seeds N] [--scenario FILE] [--out DIR] [--shm] [--draw SEED]
 #                                 [--realtime FACTOR]
 set -euo pipefail
@@ -62,7 +63,8 @@ def rmse(path, robot, first):
     e = [float(r["position_err_m"]) for r in csv.DictReader(open(path)) if r["robot"] == robot and int(r["step"]) >= first]
     return math.sqrt(sum(x * x for x in e) / len(e)) if e else float("nan")
 again, plain, back, robot = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
-print("%.2f" % (rmse(again, robot, back + 50) / rmse(plain, robot, back + 50)))
+ratio = rmse(again, robot, back + 50) / rmse(plain, robot, back + 50)
+print("n/a" if math.isnan(ratio) else "%.2f" % ratio)  # n/a: the run ended within 50 steps
 PY
 }
 
@@ -119,6 +121,8 @@ for ((seed = 1; seed <= seeds; ++seed)); do
   elif [[ $completed == yes ]]; then
     if [[ $(numbers "$plain/summary.json") == "$(numbers "$again/summary.json")" ]] &&
       cmp -s "$plain/metrics.csv" "$again/metrics.csv"; then identical=yes; fi
+  fi
+  if [[ $completed == yes ]]; then
     read -r restarts comeback < <("$python" -c "import json,sys; r = json.load(open(sys.argv[1]))['robots'][sys.argv[2]]
 print(r['restarts'], ','.join('%.2f' % s for s in r['restart_comeback_s']) or '-')" "$again/summary.json" "$victim")
   fi
@@ -129,7 +133,7 @@ print(r['restarts'], ','.join('%.2f' % s for s in r['restart_comeback_s']) or '-
   passed=yes
   if [[ $check == error_ratio ]]; then
     "$python" -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 2.0 and float(sys.argv[2]) <= 2.0 else 1)" \
-      "${identical/-/nan}" "${comeback/-/nan}" 2>/dev/null || passed=no
+      "$([[ $identical == n/a ]] && echo 0 || echo "${identical/-/nan}")" "${comeback/-/nan}" 2>/dev/null || passed=no
   elif [[ $identical != yes ]]; then
     passed=no
   fi
