@@ -93,16 +93,20 @@ struct AgentNode::Impl {
                  counters.rejected.Describe());
   }
 
+  // Whether a sample or clock of `step` is one the restored snapshot already holds: a replay from
+  // the DDS history, dropped without a count (without a snapshot, an old step is stale).
+  bool Replayed(std::uint32_t step) const { return restored_step > 0 && step <= restored_step; }
+
   // Buffers a sample of a future or current step, or rejects it.
   template <typename T>
   void Buffer(T sample, const common::WriterId& writer, cooperation::StepSlots<T>* slots, int (*sanitize)(T*),
               const char* what) {
     const std::uint32_t step = sample.stamp.step;
-    if (step <= restored_step) return;  // the snapshot holds it: a replay from the history
     if (const auto problem = cooperation::StampProblem(sample.stamp, agent.robot_id); !problem.empty()) {
       Reject(cooperation::Rejection::kMalformed, std::string(what) + ": " + problem);
       return;
     }
+    if (Replayed(step)) return;
     if (const int bad = sanitize(&sample); bad > 0) {
       Reject(cooperation::Rejection::kMalformed, fmt::format("{} malformed {} item(s) of step {}", bad, what, step),
              static_cast<std::uint32_t>(bad));
@@ -141,9 +145,10 @@ struct AgentNode::Impl {
   void AcceptClock(const msg::StepClock& c, const common::WriterId& writer) {
     const std::uint32_t step = c.stamp().step();
     using cooperation::Rejection;
-    if (step <= restored_step) return;  // the snapshot holds it: a replay from the history
     if (const auto kind = simulator.OfferClock(writer)) {
       Reject(*kind, fmt::format("a step clock of step {} from a second participant", step));
+    } else if (Replayed(step)) {
+      return;
     } else if (step < next_step) {
       Reject(Rejection::kStale, fmt::format("the step clock of step {} (the agent is at step {})", step, next_step));
     } else if (step - next_step > options.horizon_steps) {
