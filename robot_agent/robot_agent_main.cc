@@ -24,6 +24,7 @@ struct AgentFlags {
   int estimate_readers = 0;
   bool allow_rejected = false;
   std::string snapshot_dir;
+  std::string factors_dir;
 };
 
 void AddFlags(CLI::App& app, AgentFlags* flags) {
@@ -41,6 +42,9 @@ void AddFlags(CLI::App& app, AgentFlags* flags) {
   app.add_option("--snapshot-dir", flags->snapshot_dir,
                  "Write the agent's state to DIR/<robot>.snapshot every run.snapshot_every_steps steps and, started "
                  "again in the same run, go on from it");
+  app.add_option("--factors-out", flags->factors_dir,
+                 "After the last step, write the raw measurements the agent holds (its own and its peers') to "
+                 "DIR/<robot>.factors");
 }
 
 // What a snapshot must have been written by: the same scenario, seed, robot, estimator and domain.
@@ -60,7 +64,11 @@ int Run(AgentFlags flags) {
                              "')");
   }
   // The agent's code gets its own options only: never the scenario, which holds the truth.
-  const AgentOptions agent = common::AgentOptionsFor(scenario, flags.robot_id);
+  AgentOptions agent = common::AgentOptionsFor(scenario, flags.robot_id);
+  // Under DDS-Security a relayed step could not be told to be its origin's: only the own are shared.
+  const bool no_relay =
+      !flags.common.security_dir.empty() && agent.cooperation.share_factors && agent.cooperation.relay_factors;
+  if (no_relay) agent.cooperation.relay_factors = false;
   auto slam = factory::CreateFilter(agent, scenario.seed);
   if (!slam) throw std::runtime_error("filter '" + agent.filter.type + "' is not available");
   AgentNodeOptions options;
@@ -76,8 +84,10 @@ int Run(AgentFlags flags) {
   options.snapshot_dir = flags.snapshot_dir;
   options.snapshot_every_steps = static_cast<std::uint32_t>(scenario.run.snapshot_every_steps);
   options.run_fingerprint = RunFingerprint(scenario, agent, options.domain);
+  options.factors_dir = flags.factors_dir;
   const auto& stop = common::InstallStopHandler();
   AgentNode node(agent, options, std::move(slam));
+  if (no_relay) spdlog::info("DDS-Security on: raw measurements are not relayed (cooperation.relay_factors off)");
   return node.Run(stop) ? 0 : 130;
 }
 

@@ -456,6 +456,10 @@ void ParseCooperation(Section& top, ScenarioOptions* o) {
   d.transform_gate_probability = c.Get("transform_gate_probability", d.transform_gate_probability);
   d.joint_transform = c.Get("joint_transform", d.joint_transform);
   d.max_history_steps = c.Get("max_history_steps", d.max_history_steps);
+  d.share_factors = c.Get("share_factors", d.share_factors);
+  d.exchange_window_steps = c.Get("exchange_window_steps", d.exchange_window_steps);
+  d.max_batch_steps = c.Get("max_batch_steps", d.max_batch_steps);
+  d.relay_factors = c.Get("relay_factors", d.relay_factors);
   c.RejectUnknownKeys();
 }
 
@@ -842,6 +846,10 @@ void CheckCooperation(const ScenarioOptions& o, Checker* c) {
            "cooperation.transform_gate_probability", co.transform_gate_probability, "must be in (0, 1)");
   c->Check(co.max_history_steps >= 0 && co.max_history_steps <= 10000, "cooperation.max_history_steps",
            co.max_history_steps, "must be in 0..10000");
+  c->Check(co.exchange_window_steps >= 1 && co.exchange_window_steps <= 100000, "cooperation.exchange_window_steps",
+           co.exchange_window_steps, "must be in 1..100000");
+  c->Check(co.max_batch_steps >= 1 && co.max_batch_steps <= 10000, "cooperation.max_batch_steps", co.max_batch_steps,
+           "must be in 1..10000");
 }
 
 }  // namespace

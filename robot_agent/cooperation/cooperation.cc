@@ -140,7 +140,8 @@ Cooperation::Cooperation(const AgentOptions& options)
       robot_id_(options.robot_id),
       self_index_(options.TeamIndex(options.robot_id)),
       var_range_(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
-      var_bearing_(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad) {
+      var_bearing_(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad),
+      exchange_(options) {
   // A noiseless lidar still needs a usable measurement covariance.
   var_range_ = std::max(var_range_, 1e-12);
   var_bearing_ = std::max(var_bearing_, 1e-12);
@@ -204,28 +205,8 @@ bool Cooperation::HistoryValid(const MapSnapshot& m) const {
       m.history.size() != m.header.step || !Finite(m.first_pose)) {
     return false;
   }
-  constexpr std::size_t kMaxReadings = 256;  // per step and kind: a scan of a few hundred detections at most
   for (std::size_t i = 0; i < m.history.size(); ++i) {
-    const common::SensorStep& s = m.history[i];
-    if (s.lidar.stamp.step != i + 1 || !std::isfinite(s.lidar.stamp.time_s)) return false;
-    if (s.odometry.segments.size() > kMaxReadings || s.lidar.landmarks.size() > kMaxReadings ||
-        s.lidar.robots.size() > kMaxReadings) {
-      return false;
-    }
-    for (const auto& o : s.odometry.segments) {
-      if (!std::isfinite(o.v_mps) || !std::isfinite(o.w_radps) || !std::isfinite(o.time_s) ||
-          !(std::isfinite(o.dt_s) && o.dt_s >= 0.0)) {
-        return false;
-      }
-    }
-    for (const auto& d : s.lidar.landmarks) {
-      if (d.landmark_id < 1 || !(std::isfinite(d.range_m) && d.range_m > 0.0) || !std::isfinite(d.bearing_rad)) {
-        return false;
-      }
-    }
-    for (const auto& d : s.lidar.robots) {
-      if (!(std::isfinite(d.range_m) && d.range_m > 0.0) || !std::isfinite(d.bearing_rad)) return false;
-    }
+    if (!SharedStepValid(m.history[i], static_cast<std::uint32_t>(i + 1))) return false;
   }
   return true;
 }
@@ -290,6 +271,10 @@ void Cooperation::Receive(const PeerInbox& inbox, filters::SlamFilter* filter) {
     j << 1.0, 0.0, -(p.y() - t.y), 0.0, 1.0, p.x() - t.x;
     const Eigen::Matrix2d cov = j * peer->transform->Covariance() * j.transpose();
     filter->ApplyMovedNotice(p, cov, options_.cooperation.match_gate_probability);
+  }
+  // 5. Raw measurements shared: each batch whole or not at all.
+  for (const auto& b : inbox.factors) {
+    if (!options_.cooperation.share_factors || !HeaderValid(b.header) || !exchange_.Receive(b)) Reject();
   }
 }
 
@@ -539,25 +524,16 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
 }
 
 void Cooperation::Record(const common::SensorStep& step, const filters::FilterEstimate& estimate) {
-  const bool fits = step.lidar.stamp.step == history_.size() + 1 &&
-                    history_.size() < static_cast<std::size_t>(options_.cooperation.max_history_steps) &&
-                    estimate.labels_detections && estimate.detection_tracks.size() == step.lidar.landmarks.size();
+  const std::optional<common::SensorStep> labelled = LabelledStep(step, estimate);
+  if (labelled && options_.cooperation.share_factors) exchange_.RecordOwn(*labelled);
+  const bool fits = labelled && step.lidar.stamp.step == history_.size() + 1 &&
+                    history_.size() < static_cast<std::size_t>(options_.cooperation.max_history_steps);
   if (!history_usable_ || !fits) {
     history_usable_ = false;
     history_.clear();
     return;
   }
-  common::SensorStep kept;
-  kept.lidar.stamp = step.lidar.stamp;
-  kept.lidar.robots = step.lidar.robots;
-  kept.odometry = step.odometry;
-  for (std::size_t i = 0; i < step.lidar.landmarks.size(); ++i) {
-    if (estimate.detection_tracks[i] == 0) continue;
-    common::LandmarkDetection d = step.lidar.landmarks[i];
-    d.landmark_id = static_cast<int>(estimate.detection_tracks[i]);
-    kept.lidar.landmarks.push_back(d);
-  }
-  history_.push_back(std::move(kept));
+  history_.push_back(*labelled);
 }
 
 void Cooperation::ApplySnapshot(const MapSnapshot& m, filters::SlamFilter* filter) {
@@ -683,6 +659,7 @@ PeerOutbox Cooperation::AfterStep(const common::SensorStep& step, const filters:
     peer.snapshot_due = false;
     peer.transforms_due = false;
   }
+  if (options_.cooperation.share_factors) out.factors = exchange_.Outgoing(k, estimate.time_s);
   return out;
 }
 

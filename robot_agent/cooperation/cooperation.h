@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "robot_agent/cooperation/factor_exchange.h"
 #include "robot_agent/cooperation/peer_messages.h"
 #include "robot_agent/cooperation/rendezvous.h"
 #include "robot_agent/filters/slam_filter.h"
@@ -61,6 +62,8 @@ class Cooperation {
   // Every transform estimated jointly from both robots' histories (cooperation.joint_transform),
   // in order: the peer, the snapshot's step, the estimate.
   const std::vector<FrameTransform>& joint_estimates() const { return joint_estimates_; }
+  // The raw measurements held, the own and the peers' (cooperation.share_factors).
+  const FactorExchange& exchange() const { return exchange_; }
   // Landmark-moved notices accepted so far (the ELA filter will use them).
   int moved_notices() const { return moved_notices_; }
   // Mutual detections used to correct the own pose (cooperative localization).
@@ -72,6 +75,7 @@ class Cooperation {
   void Io(common::Archive& ar) {
     ar(peers_, rendezvous_, last_step_, any_step_, rejected_, stale_, moved_notices_, cooperative_updates_,
        joint_estimates_, first_pose_, history_, history_usable_);
+    exchange_.Io(ar);
   }
 
  private:
@@ -185,6 +189,7 @@ class Cooperation {
   common::Pose2 first_pose_;
   std::vector<common::SensorStep> history_;
   bool history_usable_ = true;
+  FactorExchange exchange_;
 };
 
 }  // namespace mrslam::robot_agent::cooperation

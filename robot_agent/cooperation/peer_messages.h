@@ -64,11 +64,40 @@ struct LandmarkMovedNotice {
   Eigen::Vector2d position_in_sender = Eigen::Vector2d::Zero();
 };
 
+// Raw measurements shared (factor_exchange.h). A run of one origin's steps in a batch: first_step .. first_step +
+// steps.size() - 1.
+struct FactorRun {
+  std::string origin;
+  std::uint32_t first_step = 1;
+  common::Pose2 first_pose;  // the origin's first pose in its own frame
+  std::vector<common::SensorStep> steps;
+};
+
+// How many steps of an origin the sender holds.
+struct FactorHolding {
+  std::string origin;
+  std::uint32_t steps = 0;
+};
+
+// What one agent sends another after a step: the steps the recipient lacks, as far as the sender
+// knows, and what the sender holds (so that the recipient sends only what it lacks in turn).
+// opened_by_step: the sender's step whose scan detected the recipient, which opened the exchange.
+struct FactorBatch {
+  PeerHeader header;
+  std::uint32_t opened_by_step = 0;
+  std::vector<FactorHolding> holdings;
+  std::vector<FactorRun> runs;
+  // The sender's step opened_by_step when the recipient may not hold it and the runs do not
+  // carry it (so that the recipient can check the detection), else empty.
+  std::vector<common::SensorStep> opening;
+};
+
 // What an agent sends after a step.
 struct PeerOutbox {
   std::vector<RelativeMeasurement> measurements;
   std::vector<MapSnapshot> maps;
   std::vector<LandmarkMovedNotice> moved;
+  std::vector<FactorBatch> factors;
 };
 
 // What an agent received from its peers during the previous step.
@@ -94,7 +123,11 @@ inline void Io(common::Archive& ar, MapSnapshot& m) {
 inline void Io(common::Archive& ar, LandmarkMovedNotice& n) {
   ar(n.header, n.track_id, n.landmark_id, n.position_in_sender);
 }
-inline void Io(common::Archive& ar, PeerOutbox& o) { ar(o.measurements, o.maps, o.moved); }
+inline void Io(common::Archive& ar, FactorRun& r) { ar(r.origin, r.first_step, r.first_pose, r.steps); }
+inline void Io(common::Archive& ar, FactorHolding& h) { ar(h.origin, h.steps); }
+inline void Io(common::Archive& ar, FactorBatch& b) { ar(b.header, b.opened_by_step, b.holdings, b.runs, b.opening); }
+
+inline void Io(common::Archive& ar, PeerOutbox& o) { ar(o.measurements, o.maps, o.moved, o.factors); }
 inline void Io(common::Archive& ar, RendezvousEvent& e) { ar(e.peer, e.step, e.t_self_peer, e.covariance); }
 
 }  // namespace mrslam::robot_agent::cooperation

@@ -16,6 +16,7 @@
 #include "common/snapshot_file.h"
 #include "mrslamPubSubTypes.h"
 #include "robot_agent/cooperation/cooperation.h"
+#include "robot_agent/cooperation/held_factors.h"
 #include "robot_agent/cooperation/sample_intake.h"
 #include "robot_agent/cooperation/sample_validation.h"
 #include "robot_agent/node/msg_conversion.h"
@@ -53,6 +54,8 @@ struct AgentNode::Impl {
   // The highest sequence number of the messages of each sender's steps already applied.
   std::map<std::string, std::uint32_t> applied_sequence;
   std::map<std::string, std::uint32_t> sent_sequence;
+  // Serialized bytes of the peer messages sent to and taken in from each peer so far.
+  std::map<std::string, std::uint64_t> bytes_sent_to, bytes_received_from;
   AgentCounters counters;
   std::uint32_t next_step = 1;
   std::uint32_t restored_step = 0;    // the step of the snapshot restored at the start (0: none)
@@ -83,7 +86,8 @@ struct AgentNode::Impl {
         odometry(o.horizon_steps) {
     for (const auto& peer : a.team) {
       if (peer != a.robot_id)
-        from_peers[peer] = std::make_unique<PeerReaders>(participant, a.robot_id, peer, &notifier);
+        from_peers[peer] =
+            std::make_unique<PeerReaders>(participant, a.robot_id, peer, &notifier, a.cooperation.share_factors);
     }
   }
 
@@ -134,11 +138,25 @@ struct AgentNode::Impl {
   // Takes what one peer sent on its own topics into this agent.
   void DrainPeer(const std::string& peer, PeerReaders* from) {
     msg::RelativeMeasurement r;
-    while (from->relative.TryTake(&r)) AcceptPeer(peer, FromMsg(r), &cooperation::PeerInbox::measurements);
+    while (from->relative.TryTake(&r)) {
+      bytes_received_from[peer] += msg::RelativeMeasurement::getCdrSerializedSize(r);
+      AcceptPeer(peer, FromMsg(r), &cooperation::PeerInbox::measurements);
+    }
     msg::MapSnapshot ms;
-    while (from->map.TryTake(&ms)) AcceptPeer(peer, FromMsg(ms), &cooperation::PeerInbox::maps);
+    while (from->map.TryTake(&ms)) {
+      bytes_received_from[peer] += msg::MapSnapshot::getCdrSerializedSize(ms);
+      AcceptPeer(peer, FromMsg(ms), &cooperation::PeerInbox::maps);
+    }
     msg::LandmarkMovedNotice n;
-    while (from->moved.TryTake(&n)) AcceptPeer(peer, FromMsg(n), &cooperation::PeerInbox::moved);
+    while (from->moved.TryTake(&n)) {
+      bytes_received_from[peer] += msg::LandmarkMovedNotice::getCdrSerializedSize(n);
+      AcceptPeer(peer, FromMsg(n), &cooperation::PeerInbox::moved);
+    }
+    msg::FactorBatch f;
+    while (from->factors && from->factors->TryTake(&f)) {
+      bytes_received_from[peer] += msg::FactorBatch::getCdrSerializedSize(f);
+      AcceptPeer(peer, FromMsg(f), &cooperation::PeerInbox::factors);
+    }
   }
 
   // Keeps a step clock from the simulator (the first participant to deliver one), or rejects it.
@@ -258,11 +276,13 @@ struct AgentNode::Impl {
     drop(&in->second.measurements);
     drop(&in->second.maps);
     drop(&in->second.moved);
+    drop(&in->second.factors);
   }
 
   template <typename W, typename M>
   void SendTo(W& writer, const M& message, const std::string& peer, std::map<std::string, std::uint32_t>* counts) {
     if (!writer.Write(message)) throw AgentError("DDS refused a peer message to " + peer);
+    bytes_sent_to[peer] += M::getCdrSerializedSize(message);
     ++(*counts)[peer];
   }
 
@@ -271,7 +291,7 @@ struct AgentNode::Impl {
     std::map<std::string, std::uint32_t> counts;
     auto writers = [&](const std::string& peer) -> PeerWriters& {
       auto& w = peers[peer];
-      if (!w) w = std::make_unique<PeerWriters>(participant, agent.robot_id, peer);
+      if (!w) w = std::make_unique<PeerWriters>(participant, agent.robot_id, peer, agent.cooperation.share_factors);
       return *w;
     };
     auto stamp = [&](cooperation::PeerHeader* h) { h->sequence = ++sent_sequence[h->recipient]; };
@@ -288,6 +308,10 @@ struct AgentNode::Impl {
     for (auto& m : outbox.moved) {
       stamp(&m.header);
       SendTo(writers(m.header.recipient).moved, ToMsg(m), m.header.recipient, &counts);
+    }
+    for (auto& m : outbox.factors) {
+      stamp(&m.header);
+      SendTo(*writers(m.header.recipient).factors, ToMsg(m), m.header.recipient, &counts);
     }
     return counts;
   }
@@ -313,6 +337,7 @@ struct AgentNode::Impl {
     std::sort(in->measurements.begin(), in->measurements.end(), order);
     std::sort(in->maps.begin(), in->maps.end(), order);
     std::sort(in->moved.begin(), in->moved.end(), order);
+    std::sort(in->factors.begin(), in->factors.end(), order);
   }
 
   // Logs each rendezvous once its transform is settled (the encounter's refinement steps are
@@ -360,6 +385,7 @@ struct AgentNode::Impl {
       w->relative.WaitForAcknowledgments(left());
       w->map.WaitForAcknowledgments(left());
       w->moved.WaitForAcknowledgments(left());
+      if (w->factors) w->factors->WaitForAcknowledgments(left());
     }
   }
 
@@ -367,9 +393,25 @@ struct AgentNode::Impl {
   // applied yet included), the cooperation's and the filter's.
   void Io(common::Archive& ar) {
     ar(next_step, step_times, inbox, received, applied_sequence, sent_sequence, counters.steps_processed,
-       counters.rejected.by_kind, rendezvous_logged);
+       counters.rejected.by_kind, rendezvous_logged, bytes_sent_to, bytes_received_from);
     cooperation.Io(ar);
     filter->Io(ar);
+  }
+
+  static std::uint64_t Total(const std::map<std::string, std::uint64_t>& by_peer) {
+    std::uint64_t sum = 0;
+    for (const auto& [peer, bytes] : by_peer) sum += bytes;
+    return sum;
+  }
+
+  // After the last step, with a folder: the raw measurements held, for a batch solve of them.
+  void WriteHeldFactors(std::uint32_t k) const {
+    if (options.factors_dir.empty()) return;
+    std::filesystem::create_directories(options.factors_dir);
+    const std::string path = cooperation::HeldFactorsPath(options.factors_dir, agent.robot_id);
+    cooperation::WriteHeldFactors(path, k,
+                                  {agent.robot_id, cooperation.exchange().logs(), bytes_sent_to, bytes_received_from});
+    spdlog::info("wrote the raw measurements held ({} robots) to {}", cooperation.exchange().logs().size(), path);
   }
 
   std::string SnapshotPath() const {
@@ -475,12 +517,15 @@ struct AgentNode::Impl {
     m.frames_known(cooperation.frames_known());
     m.rejected_samples(counters.rejected.Total());
     m.step_cpu_ms(step_cpu_ms);
+    m.peer_bytes_sent(Total(bytes_sent_to));
+    m.peer_bytes_received(Total(bytes_received_from));
     step_times[k] = time_s;
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));
     Acknowledge(k, time_s, sent);
     ++counters.steps_processed;
     ++next_step;
+    if (*last) WriteHeldFactors(k);
     if (!*last) WriteSnapshot(k);
     return true;
   }

@@ -40,6 +40,9 @@ struct AgentNodeOptions {
   std::string snapshot_dir;
   std::uint32_t snapshot_every_steps = 50;
   std::string run_fingerprint;
+  // With a folder: after the last step the agent writes the raw measurements it holds there
+  // (<robot>.factors, cooperation/held_factors.h).
+  std::string factors_dir;
 };
 
 // What the agent processed and rejected (each rejection also logged as a warning).

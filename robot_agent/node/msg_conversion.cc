@@ -3,8 +3,21 @@
 #include "common/dds/msg_conversion.h"
 
 namespace mrslam::robot_agent {
-
 namespace {
+
+msg::HistoryStep ToHistoryStep(const common::SensorStep& step) {
+  msg::HistoryStep h;
+  h.lidar(dds::ToMsg(step.lidar));
+  h.odometry(dds::ToMsg(step.odometry));
+  return h;
+}
+common::SensorStep FromHistoryStep(const msg::HistoryStep& h) {
+  common::SensorStep step;
+  step.lidar = dds::FromMsg(h.lidar());
+  step.odometry = dds::FromMsg(h.odometry());
+  return step;
+}
+
 msg::Stamp HeaderStamp(const cooperation::PeerHeader& h) {
   return dds::ToMsg(common::Stamp{h.sender, h.step, h.time_s});
 }
@@ -112,6 +125,43 @@ cooperation::RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
   return r;
 }
 
+msg::FactorBatch ToMsg(const cooperation::FactorBatch& b) {
+  msg::FactorBatch m;
+  m.stamp(HeaderStamp(b.header));
+  m.recipient_id(b.header.recipient);
+  m.sequence_number(b.header.sequence);
+  m.opened_by_step(b.opened_by_step);
+  for (const auto& h : b.holdings) {
+    msg::FactorHolding mh;
+    mh.origin_id(h.origin);
+    mh.steps(h.steps);
+    m.holdings().push_back(std::move(mh));
+  }
+  for (const auto& r : b.runs) {
+    msg::FactorRun mr;
+    mr.origin_id(r.origin);
+    mr.first_step(r.first_step);
+    mr.first_pose(dds::ToMsg(r.first_pose));
+    for (const auto& step : r.steps) mr.steps().push_back(ToHistoryStep(step));
+    m.runs().push_back(std::move(mr));
+  }
+  for (const auto& step : b.opening) m.opening().push_back(ToHistoryStep(step));
+  return m;
+}
+cooperation::FactorBatch FromMsg(const msg::FactorBatch& m) {
+  cooperation::FactorBatch b;
+  b.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
+  b.opened_by_step = m.opened_by_step();
+  for (const auto& h : m.holdings()) b.holdings.push_back({h.origin_id(), h.steps()});
+  for (const auto& mr : m.runs()) {
+    cooperation::FactorRun r{mr.origin_id(), mr.first_step(), dds::FromMsg(mr.first_pose()), {}};
+    for (const auto& h : mr.steps()) r.steps.push_back(FromHistoryStep(h));
+    b.runs.push_back(std::move(r));
+  }
+  for (const auto& h : m.opening()) b.opening.push_back(FromHistoryStep(h));
+  return b;
+}
+
 msg::MapSnapshot ToMsg(const cooperation::MapSnapshot& s) {
   msg::MapSnapshot m;
   m.stamp(HeaderStamp(s.header));
@@ -120,12 +170,7 @@ msg::MapSnapshot ToMsg(const cooperation::MapSnapshot& s) {
   for (const auto& l : s.landmarks) m.landmarks().push_back(ToMsg(l));
   for (const auto& t : s.known_transforms) m.known_transforms().push_back(ToMsg(t));
   m.first_pose(dds::ToMsg(s.first_pose));
-  for (const auto& step : s.history) {
-    msg::HistoryStep h;
-    h.lidar(dds::ToMsg(step.lidar));
-    h.odometry(dds::ToMsg(step.odometry));
-    m.history().push_back(std::move(h));
-  }
+  for (const auto& step : s.history) m.history().push_back(ToHistoryStep(step));
   return m;
 }
 cooperation::MapSnapshot FromMsg(const msg::MapSnapshot& m) {
@@ -134,12 +179,7 @@ cooperation::MapSnapshot FromMsg(const msg::MapSnapshot& m) {
   for (const auto& l : m.landmarks()) s.landmarks.push_back(FromMsg(l));
   for (const auto& t : m.known_transforms()) s.known_transforms.push_back(TransformFromMsg(t));
   s.first_pose = dds::FromMsg(m.first_pose());
-  for (const auto& h : m.history()) {
-    common::SensorStep step;
-    step.lidar = dds::FromMsg(h.lidar());
-    step.odometry = dds::FromMsg(h.odometry());
-    s.history.push_back(std::move(step));
-  }
+  for (const auto& h : m.history()) s.history.push_back(FromHistoryStep(h));
   return s;
 }
 

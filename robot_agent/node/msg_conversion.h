@@ -28,6 +28,8 @@ cooperation::RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m);
 msg::MapSnapshot ToMsg(const cooperation::MapSnapshot& m);
 cooperation::MapSnapshot FromMsg(const msg::MapSnapshot& m);
 msg::LandmarkMovedNotice ToMsg(const cooperation::LandmarkMovedNotice& m);
+msg::FactorBatch ToMsg(const cooperation::FactorBatch& b);
+cooperation::FactorBatch FromMsg(const msg::FactorBatch& m);
 
 // A final trajectory as FinalTrajectory chunks of at most kFinalTrajectoryChunkPoses poses,
 // stamped (robot_id, step, time_s); each pose's time from step_times (0 where unknown).

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "common/dds/participant.h"
@@ -10,20 +11,25 @@
 // that with DDS-Security the permissions bind the sender to the identity that wrote it.
 namespace mrslam::robot_agent {
 
-// Readers of what one peer sends to this agent (created at start-up for every peer of the team).
+// Readers of what one peer sends to this agent (created at start-up for every peer of the team;
+// the raw measurements' only when they are shared).
 struct PeerReaders {
-  PeerReaders(dds::Participant& participant, const std::string& self, const std::string& peer, dds::Notifier* notifier);
+  PeerReaders(dds::Participant& participant, const std::string& self, const std::string& peer, dds::Notifier* notifier,
+              bool share_factors);
   dds::Reader<msg::RelativeMeasurementPubSubType> relative;
   dds::Reader<msg::MapSnapshotPubSubType> map;
   dds::Reader<msg::LandmarkMovedNoticePubSubType> moved;
+  std::optional<dds::Reader<msg::FactorBatchPubSubType>> factors;
 };
 
-// Writers of what this agent sends to one peer (created when it first sends to that peer).
+// Writers of what this agent sends to one peer (created when it first sends to that peer; the raw
+// measurements' only when they are shared).
 struct PeerWriters {
-  PeerWriters(dds::Participant& participant, const std::string& self, const std::string& peer);
+  PeerWriters(dds::Participant& participant, const std::string& self, const std::string& peer, bool share_factors);
   dds::Writer<msg::RelativeMeasurementPubSubType> relative;
   dds::Writer<msg::MapSnapshotPubSubType> map;
   dds::Writer<msg::LandmarkMovedNoticePubSubType> moved;
+  std::optional<dds::Writer<msg::FactorBatchPubSubType>> factors;
 };
 
 }  // namespace mrslam::robot_agent

@@ -141,6 +141,14 @@ struct CooperationOptions {
   // the two maps.
   bool joint_transform = true;
   int max_history_steps = 300;
+  // Raw measurements shared peer to peer (docs/cooperation.md, "Sharing raw measurements"): every
+  // step's odometry and labelled scan, of the own robot and, relayed, of those it heard from, sent
+  // to a peer only within exchange_window_steps steps of the own lidar detecting it, at most
+  // max_batch_steps steps per message.
+  bool share_factors = false;
+  int exchange_window_steps = 20;
+  int max_batch_steps = 500;
+  bool relay_factors = true;  // also pass on other robots' steps (off under DDS-Security)
 };
 
 struct AgentOptions {

@@ -328,6 +328,8 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   // With restarts, the agents' snapshots: fresh for the run, gone after it.
   if (flags.restarts > 0) run.snapshot_dir = dir + "/snapshots";
   const SnapshotFolder snapshots(run.snapshot_dir);
+  // With raw measurements shared, what each agent holds at the end.
+  if (scenario.cooperation.share_factors) run.factors_dir = dir + "/factors";
 
   const auto start = Clock::now();
   const double cpu_start = common::ProcessTreeCpuSeconds();

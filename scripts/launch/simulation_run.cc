@@ -48,6 +48,7 @@ void StartSimulation(ProcessSupervisor* children, const RunArgs& run, const std:
     std::vector<std::string> extra = {"--robot", id, "--wait-readers", std::to_string(estimate_readers)};
     if (run.allow_rejected) extra.emplace_back("--allow-rejected");
     if (!run.snapshot_dir.empty()) extra.insert(extra.end(), {"--snapshot-dir", run.snapshot_dir});
+    if (!run.factors_dir.empty()) extra.insert(extra.end(), {"--factors-out", run.factors_dir});
     children->Start(name, ChildCommand(run, "robot_agent", extra), log_prefix + name + ".log");
   }
   children->Start("world_sim", ChildCommand(run, "world_sim", {"--wait-readers", std::to_string(truth_readers)}),

@@ -27,6 +27,7 @@ struct RunArgs {
   bool allow_rejected = false;  // the agents end normally after input that fails a run
   std::string security_dir{};   // DDS-Security with the identities in this folder (empty: off)
   std::string snapshot_dir{};   // the agents' snapshots (robot_agent --snapshot-dir; empty: none)
+  std::string factors_dir{};    // the raw measurements each agent holds at the end (--factors-out)
 };
 
 // The command line of one of the run's processes: the executable beside this one, the run's

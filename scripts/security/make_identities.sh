@@ -96,7 +96,7 @@ topics() {
 peer_topics() {
   for peer in "${robots[@]}"; do
     [ "$peer" = "$1" ] && continue
-    for kind in relative map moved; do
+    for kind in relative map moved factors; do
       if [ "$2" = in ]; then
         echo "<topic>mrslam/peer/$1/from/$peer/$kind</topic>"
       else

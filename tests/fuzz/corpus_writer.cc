@@ -59,6 +59,20 @@ void WritePeerMessages(const std::string& dir) {
   Write<msg::MapSnapshotPubSubType>(dir + "/map", 1, robot_agent::ToMsg(snapshot));
   robot_agent::cooperation::LandmarkMovedNotice notice{Header(), 7, -1, Eigen::Vector2d(2.0, 1.5)};
   Write<msg::LandmarkMovedNoticePubSubType>(dir + "/moved", 2, robot_agent::ToMsg(notice));
+  robot_agent::cooperation::FactorBatch batch;
+  batch.header = Header();
+  batch.opened_by_step = 4;
+  batch.holdings = {{"r2", 4}};
+  robot_agent::cooperation::FactorRun run{"r2", 4, {0.0, 0.0, 0.0}, {}};
+  common::SensorStep step;
+  step.lidar.stamp = {"r2", 4, 2.6};
+  step.lidar.landmarks.push_back({2.6, 4.5, -0.7, 3});
+  step.lidar.robots.push_back({2.6, 3.0, 0.4, "r1"});
+  step.odometry.stamp = step.lidar.stamp;
+  step.odometry.segments.push_back({2.0, 0.6, 1.0, 0.2});
+  run.steps.push_back(step);
+  batch.runs.push_back(run);
+  Write<msg::FactorBatchPubSubType>(dir + "/factors", 3, robot_agent::ToMsg(batch));
 }
 
 }  // namespace

@@ -58,8 +58,9 @@ nlohmann::json Numbers(nlohmann::json summary) {
        {"wall_seconds", "evaluator_wall_seconds", "dds_domain", "cpu_seconds", "cpu_cores_mean", "peak_rss_mib"})
     summary.erase(key);
   for (auto& [id, robot] : summary["robots"].items()) {
+    // The peer traffic too: a restarted agent sends again what it sent after its snapshot.
     for (const char* key : {"step_cpu_ms_median", "step_cpu_ms_p99", "latency_us_median", "latency_us_p99", "restarts",
-                            "restart_comeback_s"})
+                            "restart_comeback_s", "peer_bytes_sent_per_s", "peer_bytes_received_per_s"})
       robot.erase(key);
   }
   return summary;

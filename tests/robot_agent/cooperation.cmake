@@ -20,3 +20,6 @@ mrslam_add_test(fastslam_merge_test
 mrslam_add_test(joint_transform_test
   SOURCES joint_transform_test.cc
   LIBS mrslam_agent_cooperation mrslam_agent_factory mrslam_config mrslam_world_source)
+mrslam_add_test(factor_exchange_test
+  SOURCES factor_exchange_test.cc
+  LIBS mrslam_agent_cooperation)

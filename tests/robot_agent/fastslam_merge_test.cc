@@ -53,7 +53,7 @@ class WithFastSlam : public ::testing::TestWithParam<robot_agent::LandmarkKinema
     m.bearing_rad = -0.4;
     m.sender_pose = {0.5, 0.5, 0.1};
     m.sender_covariance = Eigen::Matrix3d::Identity() * 1e-3;
-    agent->Receive({{m}, {}, {}}, filter_.get());
+    agent->Receive({{m}, {}, {}, {}}, filter_.get());
     ASSERT_EQ(agent->frames_known(), std::vector<std::string>{"r2"});
   }
 
@@ -231,10 +231,10 @@ TEST_P(WithFastSlam, RejectedSnapshotsLeaveTheEstimateUnchanged) {
   too_big.landmarks.assign(300, l);
   MapSnapshot unknown = good;
   unknown.header.sender = "r5";
-  agent.Receive({{}, {nan, not_pd, too_big, unknown}, {}}, filter_.get());
+  agent.Receive({{}, {nan, not_pd, too_big, unknown}, {}, {}}, filter_.get());
   EXPECT_EQ(agent.rejected_messages(), 4);
   ExpectSameEstimate(filter_->Estimate(), before);
-  agent.Receive({{}, {good}, {}}, filter_.get());
+  agent.Receive({{}, {good}, {}, {}}, filter_.get());
   EXPECT_EQ(agent.rejected_messages(), 4);
   EXPECT_EQ(filter_->Estimate().landmarks.size(), before.landmarks.size() + 1);
 }

@@ -62,7 +62,7 @@ class HostileInput : public ::testing::Test {
 TEST_F(HostileInput, GoodSnapshotIsMerged) {
   ASSERT_EQ(sim_.agent(0).frames_known(), std::vector<std::string>{"r2"});
   const int merges = sim_.filter(0).merges;
-  sim_.agent(0).Receive({{}, {GoodSnapshot()}, {}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {GoodSnapshot()}, {}, {}}, &sim_.filter(0));
   EXPECT_EQ(sim_.filter(0).merges, merges + 1);
   EXPECT_EQ(sim_.agent(0).rejected_messages(), 0);
 }
@@ -74,12 +74,12 @@ TEST_F(HostileInput, MoversWithAnEstimatedMotionAreNotMerged) {
   estimated.landmarks[0].moving = true;
   estimated.landmarks[0].motion = filters::LandmarkMotionKind::kConstantTurnRate;
   const int merges = sim_.filter(0).merges;
-  sim_.agent(0).Receive({{}, {estimated}, {}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {estimated}, {}, {}}, &sim_.filter(0));
   EXPECT_EQ(sim_.filter(0).merges, merges);
   MapSnapshot known = GoodSnapshot();
   known.landmarks[0].moving = true;
   known.landmarks[0].motion = filters::LandmarkMotionKind::kUnicycle;
-  sim_.agent(0).Receive({{}, {known}, {}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {known}, {}, {}}, &sim_.filter(0));
   EXPECT_EQ(sim_.filter(0).merges, merges + 1);
   EXPECT_EQ(sim_.agent(0).rejected_messages(), 0);
 }
@@ -95,7 +95,7 @@ TEST_F(HostileInput, NanAndInfinity) {
   m.range_m = std::nan("");
   RelativeMeasurement n = GoodMeasurement();
   n.sender_pose.heading = std::numeric_limits<double>::infinity();
-  ExpectRejected({{m, n}, {a, b, c}, {}});
+  ExpectRejected({{m, n}, {a, b, c}, {}, {}});
 }
 
 TEST_F(HostileInput, CovarianceNotSymmetricPositiveDefinite) {
@@ -107,7 +107,7 @@ TEST_F(HostileInput, CovarianceNotSymmetricPositiveDefinite) {
   c.known_transforms.push_back({"r3", 1, {1.0, 2.0, 0.3}, Eigen::Matrix3d::Zero()});
   RelativeMeasurement m = GoodMeasurement();
   m.sender_covariance(2, 2) = 0.0;
-  ExpectRejected({{m}, {a, b, c}, {}});
+  ExpectRejected({{m}, {a, b, c}, {}, {}});
 }
 
 TEST_F(HostileInput, UnknownRobots) {
@@ -121,7 +121,7 @@ TEST_F(HostileInput, UnknownRobots) {
   m.header.sender = "r1";  // itself
   LandmarkMovedNotice n;
   n.header = {"r7", "r1", sim_.step(), 0.0, 1};
-  ExpectRejected({{m}, {a, b, c}, {n}});
+  ExpectRejected({{m}, {a, b, c}, {n}, {}});
 }
 
 // Landmarks carry their provenance (the robot that first mapped them): one naming a robot the
@@ -132,7 +132,7 @@ TEST_F(HostileInput, ProvenanceOfAnUnknownRobot) {
   a.landmarks[0].origin_robot = 3;  // robots 0..2
   MapSnapshot b = GoodSnapshot();
   b.landmarks[0].origin_robot = -2;
-  ExpectRejected({{}, {a, b}, {}});
+  ExpectRejected({{}, {a, b}, {}, {}});
 }
 
 TEST_F(HostileInput, OwnLandmarksComingBackAreNotMergedAgain) {
@@ -141,7 +141,7 @@ TEST_F(HostileInput, OwnLandmarksComingBackAreNotMergedAgain) {
   echo.landmarks[0].origin_track = 5;
   const int merges = sim_.filter(0).merges;
   const std::size_t mapped = sim_.filter(0).estimate.landmarks.size();
-  sim_.agent(0).Receive({{}, {echo}, {}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {echo}, {}, {}}, &sim_.filter(0));
   EXPECT_EQ(sim_.filter(0).merges, merges);
   EXPECT_EQ(sim_.filter(0).estimate.landmarks.size(), mapped);
   EXPECT_EQ(sim_.agent(0).rejected_messages(), 0);  // not hostile: simply nothing new
@@ -151,7 +151,7 @@ TEST_F(HostileInput, OwnLandmarksComingBackAreNotMergedAgain) {
   mixed.landmarks.push_back(echo.landmarks[0]);
   mixed.landmarks[0].origin_robot = 2;  // r3's, merged by r2 earlier
   mixed.landmarks[1].mean.x() = -10.0;  // r1's, elsewhere
-  sim_.agent(0).Receive({{}, {mixed}, {}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {mixed}, {}, {}}, &sim_.filter(0));
   EXPECT_EQ(sim_.filter(0).merges, merges + 1);
   ASSERT_EQ(sim_.filter(0).estimate.landmarks.size(), mapped + 1);  // r3's only
   EXPECT_EQ(sim_.filter(0).estimate.landmarks.back().origin_robot, 2);
@@ -160,7 +160,7 @@ TEST_F(HostileInput, OwnLandmarksComingBackAreNotMergedAgain) {
 TEST_F(HostileInput, AbsurdSize) {
   MapSnapshot a = GoodSnapshot();
   a.landmarks.assign(257, a.landmarks[0]);
-  ExpectRejected({{}, {a}, {}});
+  ExpectRejected({{}, {a}, {}, {}});
 }
 
 TEST_F(HostileInput, BrokenHistories) {
@@ -177,7 +177,7 @@ TEST_F(HostileInput, BrokenHistories) {
     return m;
   };
   // The well-formed one is taken (its joint estimate may or may not be used: no shared landmark).
-  sim_.agent(0).Receive({{}, {with_history()}, {}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {with_history()}, {}, {}}, &sim_.filter(0));
   ASSERT_EQ(sim_.agent(0).rejected_messages(), 0);
   MapSnapshot nan = with_history();
   nan.history[3].lidar.landmarks[0].range_m = std::nan("");
@@ -193,39 +193,39 @@ TEST_F(HostileInput, BrokenHistories) {
   extra.history.push_back(extra.history.back());
   MapSnapshot crowded = with_history();  // more readings in one step than any scan holds
   crowded.history[1].lidar.landmarks.assign(257, crowded.history[1].lidar.landmarks[0]);
-  ExpectRejected({{}, {nan, odometry, gap, unlabelled, first_pose, extra, crowded}, {}});
+  ExpectRejected({{}, {nan, odometry, gap, unlabelled, first_pose, extra, crowded}, {}, {}});
 }
 
 TEST_F(HostileInput, StaleAndFutureSteps) {
-  sim_.agent(0).Receive({{}, {GoodSnapshot()}, {}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {GoodSnapshot()}, {}, {}}, &sim_.filter(0));
   MapSnapshot a = GoodSnapshot();
   a.header.step = sim_.step() - 5;  // older than the one just applied
   MapSnapshot b = GoodSnapshot();
   b.header.step = sim_.step() + 100;
   RelativeMeasurement m = GoodMeasurement();
-  m.header.step = 14;                    // r2's measurements up to step 15 were applied
-  ExpectRejected({{m}, {a, b}, {}}, 2);  // a and m only out of order; b from the future
+  m.header.step = 14;                        // r2's measurements up to step 15 were applied
+  ExpectRejected({{m}, {a, b}, {}, {}}, 2);  // a and m only out of order; b from the future
 }
 
 TEST_F(HostileInput, SnapshotFromAPeerWhoseFrameIsUnknown) {
   MapSnapshot a = GoodSnapshot();
   a.header.sender = "r3";
-  ExpectRejected({{}, {a}, {}}, 1);  // a team member not met yet: out of order, not malformed
+  ExpectRejected({{}, {a}, {}, {}}, 1);  // a team member not met yet: out of order, not malformed
 }
 
 TEST_F(HostileInput, MovedNoticesAreValidatedAndCounted) {
   LandmarkMovedNotice good;
   good.header = {"r2", "r1", sim_.step(), 0.0, 1};
   good.position_in_sender = {1.0, 2.0};
-  sim_.agent(0).Receive({{}, {}, {good}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {}, {good}, {}}, &sim_.filter(0));
   EXPECT_EQ(sim_.agent(0).moved_notices(), 1);
   LandmarkMovedNotice bad = good;
   bad.position_in_sender.x() = std::nan("");
-  ExpectRejected({{}, {}, {bad}});
+  ExpectRejected({{}, {}, {bad}, {}});
   EXPECT_EQ(sim_.agent(0).moved_notices(), 1);
   LandmarkMovedNotice unknown_frame = good;
   unknown_frame.header.sender = "r3";
-  ExpectRejected({{}, {}, {unknown_frame}}, 1);
+  ExpectRejected({{}, {}, {unknown_frame}, {}}, 1);
 }
 
 TEST_F(HostileInput, MovedNoticeReachesTheFilterInTheOwnFrame) {
@@ -235,7 +235,7 @@ TEST_F(HostileInput, MovedNoticeReachesTheFilterInTheOwnFrame) {
   n.header = {"r2", "r1", sim_.step(), 0.0, 1};
   n.position_in_sender = {1.0, 2.0};
   sim_.filter(0).notices.clear();
-  sim_.agent(0).Receive({{}, {}, {n}}, &sim_.filter(0));
+  sim_.agent(0).Receive({{}, {}, {n}, {}}, &sim_.filter(0));
   ASSERT_EQ(sim_.filter(0).notices.size(), 1U);
   const Eigen::Vector2d expected = common::TransformPoint(t12->t_self_peer, n.position_in_sender);
   EXPECT_NEAR((sim_.filter(0).notices[0].first - expected).norm(), 0.0, 1e-12);

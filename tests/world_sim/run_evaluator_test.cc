@@ -52,6 +52,8 @@ class RunEvaluatorTest : public ::testing::Test {
       r1.frames_known = r1_frames_known;
       r1.rejected_samples = 2 * step;     // the agent's running count
       r1.step_cpu_ms = 1.0 + 2.0 * step;  // 1 and 3 ms
+      r1.peer_bytes_sent = 300U * step;   // the agent's running counts
+      r1.peer_bytes_received = 100U * step;
       evaluator.AddEstimate("r1", r1);
       evaluator.AddEstimate("r2", r2);
       if (step > 0) {  // standing still
@@ -92,6 +94,14 @@ TEST_F(RunEvaluatorTest, StepCpuTimeIsSummarizedByMedianAndP99) {
   EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["step_cpu_ms_median"].get<double>(), 2.0);
   EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["step_cpu_ms_p99"].get<double>(), 1.0 + 2.0 * 0.99);
   EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["step_cpu_ms_median"].get<double>(), 0.0);
+}
+
+TEST_F(RunEvaluatorTest, PeerBytesArePerSimulatedSecondOfTheAgentsSteps) {
+  const nlohmann::json summary = Score({});
+  const double seconds = 1 * scenario_.run.dt_s;  // the last estimate is of step 1
+  EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["peer_bytes_sent_per_s"].get<double>(), 300.0 / seconds);
+  EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["peer_bytes_received_per_s"].get<double>(), 100.0 / seconds);
+  EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["peer_bytes_sent_per_s"].get<double>(), 0.0);
 }
 
 TEST_F(RunEvaluatorTest, AnAnnouncedFinalTrajectoryIsAwaitedAndScored) {

@@ -45,6 +45,8 @@ struct RobotEstimate {
   // Samples and peer messages the agent has rejected so far (malformed, stale, not for it).
   std::uint32_t rejected_samples = 0;
   double step_cpu_ms = 0.0;  // the agent's CPU time for this step's estimation
+  // Serialized bytes of the peer messages the agent has sent and taken in so far.
+  std::uint64_t peer_bytes_sent = 0, peer_bytes_received = 0;
   // When the agent wrote the message and the evaluator received it (ns since the Unix epoch;
   // 0 unknown): DeliveryTiming.
   std::int64_t written_ns = 0;

@@ -324,6 +324,11 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["steps_scored"] = s.steps_scored;
   r["step_cpu_ms_median"] = robot.step_cpu_ms.empty() ? 0.0 : Median(robot.step_cpu_ms);
   r["step_cpu_ms_p99"] = robot.step_cpu_ms.empty() ? 0.0 : Percentile(robot.step_cpu_ms, 99.0);
+  // Per simulated second of the steps the agent went through.
+  const double seconds = robot.last ? robot.last->step * scenario_.run.dt_s : 0.0;
+  const auto per_s = [&](std::uint64_t bytes) { return seconds > 0.0 ? static_cast<double>(bytes) / seconds : 0.0; };
+  r["peer_bytes_sent_per_s"] = robot.last ? per_s(robot.last->peer_bytes_sent) : 0.0;
+  r["peer_bytes_received_per_s"] = robot.last ? per_s(robot.last->peer_bytes_received) : 0.0;
   const DeliverySummary delivery = timing_.Summary(id);
   r["latency_us_median"] = delivery.latency_us_median;
   r["latency_us_p99"] = delivery.latency_us_p99;

@@ -1,0 +1,223 @@
+#include "robot_agent/cooperation/factor_exchange.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <set>
+
+namespace mrslam::robot_agent::cooperation {
+namespace {
+
+constexpr std::size_t kMaxItems = 256;  // per step and kind: a scan of a few hundred detections at most
+
+bool FinitePose(const common::Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.heading); }
+
+bool Reading(double range_m, double bearing_rad, double time_s) {
+  return std::isfinite(range_m) && range_m > 0.0 && std::isfinite(bearing_rad) && std::isfinite(time_s);
+}
+
+}  // namespace
+
+std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step,
+                                               const filters::FilterEstimate& estimate) {
+  if (!estimate.labels_detections || estimate.detection_tracks.size() != step.lidar.landmarks.size()) {
+    return std::nullopt;
+  }
+  common::SensorStep kept;
+  kept.lidar.stamp = step.lidar.stamp;
+  kept.lidar.robots = step.lidar.robots;
+  kept.odometry = step.odometry;
+  for (std::size_t i = 0; i < step.lidar.landmarks.size(); ++i) {
+    if (estimate.detection_tracks[i] == 0) continue;
+    common::LandmarkDetection d = step.lidar.landmarks[i];
+    d.landmark_id = static_cast<int>(estimate.detection_tracks[i]);
+    kept.lidar.landmarks.push_back(d);
+  }
+  return kept;
+}
+
+bool SharedStepValid(const common::SensorStep& s, std::uint32_t step) {
+  if (s.lidar.stamp.step != step || !std::isfinite(s.lidar.stamp.time_s)) return false;
+  if (s.odometry.segments.size() > kMaxItems || s.lidar.landmarks.size() > kMaxItems ||
+      s.lidar.robots.size() > kMaxItems || !s.imu.readings.empty()) {
+    return false;
+  }
+  for (const auto& o : s.odometry.segments) {
+    if (!std::isfinite(o.v_mps) || !std::isfinite(o.w_radps) || !std::isfinite(o.time_s) ||
+        !(std::isfinite(o.dt_s) && o.dt_s >= 0.0)) {
+      return false;
+    }
+  }
+  for (const auto& d : s.lidar.landmarks) {
+    if (d.landmark_id < 1 || !Reading(d.range_m, d.bearing_rad, d.time_s)) return false;
+  }
+  for (const auto& d : s.lidar.robots) {
+    if (d.seen_robot_id.empty() || !Reading(d.range_m, d.bearing_rad, d.time_s)) return false;
+  }
+  return true;
+}
+
+FactorExchange::FactorExchange(const AgentOptions& options) : options_(options), self_(options.robot_id) {
+  logs_[self_].first_pose = options.initial_pose;
+}
+
+std::uint32_t FactorExchange::Held(const std::string& origin) const {
+  const auto it = logs_.find(origin);
+  return it == logs_.end() ? 0 : it->second.Held();
+}
+
+void FactorExchange::RecordOwn(const common::SensorStep& labelled) {
+  FactorLog& own = logs_[self_];
+  const std::uint32_t k = labelled.lidar.stamp.step;
+  if (!own_growing_ || k != own.Held() + 1) {
+    own_growing_ = false;
+    return;
+  }
+  own.steps.push_back(labelled);
+  if (static_cast<int>(k) < options_.rendezvous.enable_from_step) return;
+  for (const auto& d : labelled.lidar.robots) {
+    if (d.seen_robot_id != self_ && options_.TeamIndex(d.seen_robot_id) >= 0) detected_at_[d.seen_robot_id] = k;
+  }
+}
+
+std::vector<std::string> FactorExchange::SendOrder() const {
+  std::vector<std::string> order{self_};
+  if (!options_.cooperation.relay_factors) return order;
+  for (const auto& id : options_.team) {
+    if (id != self_ && logs_.count(id) > 0) order.push_back(id);
+  }
+  return order;
+}
+
+std::uint32_t FactorExchange::SendFrom(const std::string& peer, const std::string& origin) {
+  const std::uint32_t holds = peer_holdings_[peer][origin];
+  auto& sends = sends_[peer][origin];
+  if (sends.empty()) return holds;
+  // The newest send the peer's newest batch must reflect.
+  const auto heard = holdings_step_.find(peer);
+  auto covered = sends.end();
+  if (heard != holdings_step_.end() && heard->second >= kAckLagSteps) {
+    const auto after = sends.upper_bound(heard->second - kAckLagSteps);
+    if (after != sends.begin()) covered = std::prev(after);
+  }
+  if (covered != sends.end() && holds < covered->second) {
+    sends.clear();  // lost: from what it holds
+    return holds;
+  }
+  if (covered != sends.end()) sends.erase(sends.begin(), covered);
+  constexpr std::size_t kMaxSendsKept = 64;  // without news from the peer, the newest only matter
+  while (sends.size() > kMaxSendsKept) sends.erase(sends.begin());
+  return std::max(holds, sends.rbegin()->second);
+}
+
+std::optional<FactorBatch> FactorExchange::BatchFor(const std::string& peer, std::uint32_t k, double time_s) {
+  FactorBatch batch;
+  batch.header = {self_, peer, k, time_s, 0};
+  batch.opened_by_step = detected_at_.at(peer);
+  for (const auto& [origin, log] : logs_) batch.holdings.push_back({origin, log.Held()});
+  auto budget = static_cast<std::size_t>(options_.cooperation.max_batch_steps);
+  for (const auto& origin : SendOrder()) {
+    if (origin == peer || budget == 0) continue;
+    const FactorLog& log = logs_.at(origin);
+    const std::uint32_t from = SendFrom(peer, origin);
+    if (from >= log.Held()) continue;
+    const std::uint32_t to = std::min<std::uint32_t>(log.Held(), from + static_cast<std::uint32_t>(budget));
+    FactorRun run{origin, from + 1, log.first_pose, {}};
+    run.steps.assign(log.steps.begin() + from, log.steps.begin() + to);
+    budget -= run.steps.size();
+    sends_[peer][origin][k] = to;
+    batch.runs.push_back(std::move(run));
+  }
+  if (batch.runs.empty()) return std::nullopt;
+  const FactorRun& own = batch.runs.front();
+  const bool carried = own.origin == self_ && batch.opened_by_step >= own.first_step &&
+                       batch.opened_by_step - own.first_step < own.steps.size();
+  if (!carried && peer_holdings_[peer][self_] < batch.opened_by_step) {
+    batch.opening.push_back(logs_.at(self_).steps.at(batch.opened_by_step - 1));
+  }
+  return batch;
+}
+
+std::vector<FactorBatch> FactorExchange::Outgoing(std::uint32_t k, double time_s) {
+  std::vector<FactorBatch> out;
+  for (const auto& [peer, at] : detected_at_) {
+    if (at > k || k - at > static_cast<std::uint32_t>(options_.cooperation.exchange_window_steps)) continue;
+    if (auto batch = BatchFor(peer, k, time_s)) out.push_back(std::move(*batch));
+  }
+  return out;
+}
+
+bool FactorExchange::BatchValid(const FactorBatch& b) const {
+  const auto& co = options_.cooperation;
+  if (b.opened_by_step == 0 || b.opened_by_step > b.header.step ||
+      b.header.step - b.opened_by_step > static_cast<std::uint32_t>(co.exchange_window_steps)) {
+    return false;
+  }
+  if (b.holdings.size() > options_.team.size() || b.runs.size() > options_.team.size()) return false;
+  std::set<std::string> seen;
+  for (const auto& h : b.holdings) {
+    if (options_.TeamIndex(h.origin) < 0 || !seen.insert(h.origin).second) return false;
+  }
+  seen.clear();
+  std::size_t steps = 0;
+  for (const auto& run : b.runs) {
+    if (options_.TeamIndex(run.origin) < 0 || run.origin == self_ || !seen.insert(run.origin).second) return false;
+    if (run.origin != b.header.sender && !co.relay_factors) return false;
+    if (run.first_step == 0 || !FinitePose(run.first_pose)) return false;
+    steps += run.steps.size();
+    if (steps > static_cast<std::size_t>(co.max_batch_steps)) return false;
+    for (std::size_t i = 0; i < run.steps.size(); ++i) {
+      if (!SharedStepValid(run.steps[i], run.first_step + static_cast<std::uint32_t>(i))) return false;
+    }
+  }
+  return b.opening.size() <= 1 && (b.opening.empty() || SharedStepValid(b.opening[0], b.opened_by_step));
+}
+
+const common::SensorStep* FactorExchange::Opening(const FactorBatch& b) const {
+  const auto held = logs_.find(b.header.sender);
+  if (held != logs_.end() && b.opened_by_step <= held->second.Held()) return &held->second.steps[b.opened_by_step - 1];
+  for (const auto& run : b.runs) {
+    if (run.origin == b.header.sender && b.opened_by_step >= run.first_step &&
+        b.opened_by_step - run.first_step < run.steps.size()) {
+      return &run.steps[b.opened_by_step - run.first_step];
+    }
+  }
+  return b.opening.empty() ? nullptr : &b.opening.front();
+}
+
+void FactorExchange::Apply(const FactorRun& run) {
+  FactorLog& log = logs_[run.origin];
+  const std::uint32_t held = log.Held();
+  if (run.first_step > held + 1) {
+    ++gaps_;
+    return;
+  }
+  if (held == 0) log.first_pose = run.first_pose;
+  const std::size_t skip = held + 1 - run.first_step;
+  if (skip >= run.steps.size()) return;
+  log.steps.insert(log.steps.end(), run.steps.begin() + static_cast<std::ptrdiff_t>(skip), run.steps.end());
+  steps_received_ += run.steps.size() - skip;
+}
+
+bool FactorExchange::Receive(const FactorBatch& batch) {
+  if (!BatchValid(batch)) return false;
+  const common::SensorStep* opening = Opening(batch);
+  if (opening == nullptr) {
+    ++gaps_;  // the step that opened it was lost on the way
+    return true;
+  }
+  const auto& seen = opening->lidar.robots;
+  if (std::none_of(seen.begin(), seen.end(), [&](const common::RobotDetection& d) { return d.seen_robot_id == self_; }))
+    return false;
+  const std::string& sender = batch.header.sender;
+  if (batch.header.step >= holdings_step_[sender]) {
+    holdings_step_[sender] = batch.header.step;
+    auto& holdings = peer_holdings_[sender];
+    holdings.clear();
+    for (const auto& h : batch.holdings) holdings[h.origin] = h.steps;
+  }
+  for (const auto& run : batch.runs) Apply(run);
+  return true;
+}
+
+}  // namespace mrslam::robot_agent::cooperation

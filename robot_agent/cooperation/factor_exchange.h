@@ -1,0 +1,114 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/archive.h"
+#include "common/se2.h"
+#include "common/sensor_archive.h"
+#include "common/sensor_types.h"
+#include "robot_agent/cooperation/peer_messages.h"
+#include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/options/agent_options.h"
+
+// Raw measurements shared peer to peer (docs/cooperation.md, "Sharing raw measurements"). A
+// robot's measurements are its steps: step t's odometry segments and its scan, each landmark
+// detection labelled by the robot's own track of it (unlabelled ones left out) and each robot
+// detection naming the robot seen; no IMU. A step is known everywhere by (origin robot, step),
+// so a step that reaches an agent twice, by two relays, enters once.
+namespace mrslam::robot_agent::cooperation {
+
+// One robot's steps as an agent holds them: its first pose in its own frame and its steps
+// 1..n without a gap (steps[i] is step i + 1).
+struct FactorLog {
+  common::Pose2 first_pose;
+  std::vector<common::SensorStep> steps;
+
+  std::uint32_t Held() const { return static_cast<std::uint32_t>(steps.size()); }
+  void Io(common::Archive& ar) { ar(first_pose, steps); }
+};
+
+// The step as a shared measurement: its odometry, its robot detections and its landmark
+// detections labelled by estimate.detection_tracks (the unlabelled left out), the stamp kept;
+// nothing when the filter does not label its detections.
+std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, const filters::FilterEstimate& estimate);
+
+// Whether s is a well-formed shared step `step`: that stamp, finite values, a positive range,
+// a track label on every landmark detection, a seen robot named on every robot detection, no
+// IMU, at most 256 items per kind.
+bool SharedStepValid(const common::SensorStep& s, std::uint32_t step);
+
+// An agent's side of the exchange. Pure; not thread-safe.
+//
+// Sending: after step k, to every peer its own lidar detected at a step within
+// cooperation.exchange_window_steps before k (from rendezvous.enable_from_step on), one batch
+// with the steps that peer lacks: of every origin it holds (only its own with relaying off), but
+// the peer's own, from what was sent before (taken as on its way), at most
+// cooperation.max_batch_steps steps in all, its own origin first. What does not fit goes at the
+// next step of the window or of the next one. A batch the peer sent at step h tells what it
+// holds after the batches sent to it up to step h - kAckLagSteps: when it holds less of an
+// origin than those sent (a batch was lost), the sending starts again from what it holds.
+// Receiving: a batch is rejected whole (and counted) unless it is well formed and within its
+// window: opened_by_step no later than the batch's step and at most exchange_window_steps before
+// it, and the sender's step opened_by_step (held, in a run or the batch's opening) detects this
+// robot; no run of this robot's own steps, none of another origin with relaying off. A batch
+// whose opening step cannot be found (the recipient lost the batch that carried it) is left out
+// as a gap, not rejected. An accepted batch's runs extend the logs: the steps already held are
+// skipped, a run that starts beyond the first step missing is left out (counted as a gap: the
+// sender will send from the count this agent says it holds).
+class FactorExchange {
+ public:
+  static constexpr std::uint32_t kAckLagSteps = 2;
+
+  explicit FactorExchange(const AgentOptions& options);
+
+  // The own step k (LabelledStep) goes into the own log; its robot detections open the window
+  // to those peers. A step that does not follow the last one ends the own log's growth (a gap
+  // cannot be shared).
+  void RecordOwn(const common::SensorStep& labelled);
+  // The batches to send after step k (header: sender, recipient, k, time_s; sequence 0).
+  std::vector<FactorBatch> Outgoing(std::uint32_t k, double time_s);
+  // Validates and applies one batch; false when it is rejected.
+  bool Receive(const FactorBatch& batch);
+
+  // Every origin's log held, the own included (by robot id).
+  const std::map<std::string, FactorLog>& logs() const { return logs_; }
+  std::uint32_t Held(const std::string& origin) const;
+  int gaps() const { return gaps_; }
+  // Steps taken in from peers (each once).
+  std::uint64_t steps_received() const { return steps_received_; }
+
+  void Io(common::Archive& ar) {
+    ar(logs_, own_growing_, detected_at_, peer_holdings_, holdings_step_, sends_, gaps_, steps_received_);
+  }
+
+ private:
+  bool BatchValid(const FactorBatch& b) const;
+  // The sender's step opened_by_step: held, in the batch's runs or its opening; nullptr if none.
+  const common::SensorStep* Opening(const FactorBatch& b) const;
+  void Apply(const FactorRun& run);
+  // The origins to send, in order: the own, then the others in team order.
+  std::vector<std::string> SendOrder() const;
+  std::optional<FactorBatch> BatchFor(const std::string& peer, std::uint32_t k, double time_s);
+  // The first step of origin to send peer: past what it holds or was sent, or from what it
+  // holds again when its newest batch shows a loss.
+  std::uint32_t SendFrom(const std::string& peer, const std::string& origin);
+
+  AgentOptions options_;
+  std::string self_;
+  std::map<std::string, FactorLog> logs_;
+  bool own_growing_ = true;
+  std::map<std::string, std::uint32_t> detected_at_;  // per peer: the last own step detecting it
+  // Per peer and origin: the count it last said it holds (of its newest batch, sent at
+  // holdings_step_), and what was sent to it (by the step sent at: steps 1..n sent).
+  std::map<std::string, std::map<std::string, std::uint32_t>> peer_holdings_;
+  std::map<std::string, std::uint32_t> holdings_step_;
+  std::map<std::string, std::map<std::string, std::map<std::uint32_t, std::uint32_t>>> sends_;
+  int gaps_ = 0;
+  std::uint64_t steps_received_ = 0;
+};
+
+}  // namespace mrslam::robot_agent::cooperation

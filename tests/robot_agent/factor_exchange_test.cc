@@ -1,0 +1,282 @@
+// Raw measurements shared peer to peer (FactorExchange), in process: what is sent within the
+// window after a detection, relaying to a robot that never met the origin, a lost batch made
+// good, a step reaching an agent twice entering once, and forged or malformed batches rejected
+// whole.
+#include "robot_agent/cooperation/factor_exchange.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace mrslam::robot_agent::cooperation {
+namespace {
+
+constexpr int kWindow = 5;
+
+AgentOptions Options(const std::string& self, bool relay = true) {
+  AgentOptions o;
+  o.robot_id = self;
+  o.team = {"a", "b", "c"};
+  o.cooperation.share_factors = true;
+  o.cooperation.exchange_window_steps = kWindow;
+  o.cooperation.max_batch_steps = 50;
+  o.cooperation.relay_factors = relay;
+  return o;
+}
+
+// Robot `self`'s step k: one odometry segment, one labelled landmark reading and a detection of
+// every robot in `sees`.
+common::SensorStep Step(const std::string& self, std::uint32_t k, const std::vector<std::string>& sees = {}) {
+  common::SensorStep s;
+  const double t = 0.1 * k;
+  s.lidar.stamp = {self, k, t};
+  s.odometry.stamp = {self, k, t};
+  s.odometry.segments = {{t - 0.1, 0.1, 0.5, 0.01 * k}};
+  s.lidar.landmarks = {{t, 2.0 + 0.01 * k, 0.3, 7}};
+  for (const auto& id : sees) s.lidar.robots.push_back({t, 1.5, -0.2, id});
+  return s;
+}
+
+// Three agents stepping together; deliver() hands each batch of a step to its recipient unless
+// the filter drops it.
+class ThreeAgents {
+ public:
+  explicit ThreeAgents(bool relay = true) {
+    for (const std::string id : {"a", "b", "c"}) agents_.emplace(id, FactorExchange(Options(id, relay)));
+  }
+  FactorExchange& operator[](const std::string& id) { return agents_.at(id); }
+
+  // Step k: every agent records its step (seeing those in sees[id]) and sends; the batches reach
+  // their recipients unless drop says otherwise. Returns the batches sent.
+  std::vector<FactorBatch> Run(std::uint32_t k, std::map<std::string, std::vector<std::string>> sees,
+                               bool (*drop)(const FactorBatch&) = nullptr) {
+    std::vector<FactorBatch> sent;
+    for (auto& [id, agent] : agents_) {
+      agent.RecordOwn(Step(id, k, sees[id]));
+      for (auto& b : agent.Outgoing(k, 0.1 * k)) sent.push_back(std::move(b));
+    }
+    for (const auto& b : sent) {
+      if (drop != nullptr && drop(b)) continue;
+      EXPECT_TRUE(agents_.at(b.header.recipient).Receive(b)) << b.header.sender << " -> " << b.header.recipient;
+    }
+    return sent;
+  }
+
+ private:
+  std::map<std::string, FactorExchange> agents_;
+};
+
+std::map<std::string, std::vector<std::string>> Mutual(const std::string& x, const std::string& y) {
+  return {{x, {y}}, {y, {x}}};
+}
+
+TEST(FactorExchange, SendsWhatThePeerLacksOnlyWithinTheWindowOfADetection) {
+  ThreeAgents t;
+  for (std::uint32_t k = 1; k <= 4; ++k) EXPECT_TRUE(t.Run(k, {}).empty()) << "nobody has met at step " << k;
+  const auto first = t.Run(5, Mutual("a", "b"));
+  ASSERT_EQ(first.size(), 2U);
+  EXPECT_EQ(t["b"].Held("a"), 5U);
+  EXPECT_EQ(t["a"].Held("b"), 5U);
+  // Each next step of the window carries only the new step.
+  for (std::uint32_t k = 6; k <= 5 + kWindow; ++k) {
+    for (const auto& b : t.Run(k, {})) {
+      ASSERT_EQ(b.runs.size(), 1U);
+      EXPECT_EQ(b.runs[0].first_step, k);
+      EXPECT_EQ(b.runs[0].steps.size(), 1U);
+    }
+  }
+  EXPECT_EQ(t["b"].Held("a"), 5U + kWindow);
+  EXPECT_TRUE(t.Run(6 + kWindow, {}).empty()) << "the window has closed";
+  EXPECT_EQ(t["c"].Held("a"), 0U);
+  EXPECT_EQ(t["a"].steps_received(), 5U + kWindow);
+  // What b holds of a is a's own log, step for step.
+  const auto& mine = t["a"].logs().at("a").steps;
+  const auto& theirs = t["b"].logs().at("a").steps;
+  ASSERT_EQ(theirs.size(), 5U + kWindow);
+  for (std::size_t i = 0; i < theirs.size(); ++i) {
+    EXPECT_EQ(theirs[i].lidar.stamp.step, mine[i].lidar.stamp.step);
+    EXPECT_EQ(theirs[i].odometry.segments[0].w_radps, mine[i].odometry.segments[0].w_radps);
+  }
+}
+
+TEST(FactorExchange, RelaysToARobotThatNeverMetTheOrigin) {
+  ThreeAgents t;
+  for (std::uint32_t k = 1; k <= 3; ++k) t.Run(k, Mutual("a", "b"));
+  for (std::uint32_t k = 4; k <= 20; ++k) {
+    for (const auto& b : t.Run(k, k >= 15 ? Mutual("b", "c") : std::map<std::string, std::vector<std::string>>{})) {
+      EXPECT_FALSE((b.header.sender == "a" && b.header.recipient == "c") ||
+                   (b.header.sender == "c" && b.header.recipient == "a"));
+    }
+  }
+  // b held a's steps up to the end of their window (3 + kWindow); c has them all through b.
+  EXPECT_EQ(t["b"].Held("a"), 3U + kWindow);
+  EXPECT_EQ(t["c"].Held("a"), 3U + kWindow);
+  EXPECT_EQ(t["a"].Held("c"), 0U);
+}
+
+TEST(FactorExchange, WithoutRelayingOnlyTheOwnStepsTravel) {
+  ThreeAgents t(/*relay=*/false);
+  for (std::uint32_t k = 1; k <= 3; ++k) t.Run(k, Mutual("a", "b"));
+  for (std::uint32_t k = 4; k <= 20; ++k) t.Run(k, k >= 15 ? Mutual("b", "c") : decltype(Mutual("b", "c")){});
+  EXPECT_EQ(t["b"].Held("a"), 3U + kWindow);
+  EXPECT_EQ(t["c"].Held("a"), 0U);
+  EXPECT_EQ(t["c"].Held("b"), 20U);
+}
+
+TEST(FactorExchange, ALostBatchIsMadeGood) {
+  ThreeAgents t;
+  for (std::uint32_t k = 1; k <= 4; ++k) t.Run(k, {});
+  // a's first batch to b is lost; the next one starts beyond what b holds (a gap) until b's
+  // batches tell a what b holds, and a sends from there.
+  t.Run(5, Mutual("a", "b"), [](const FactorBatch& b) { return b.header.sender == "a"; });
+  EXPECT_EQ(t["b"].Held("a"), 0U);
+  const std::uint32_t told = 5 + FactorExchange::kAckLagSteps + 1;  // b's batch of step 6 is heard
+  for (std::uint32_t k = 6; k < told; ++k) t.Run(k, {});
+  EXPECT_GT(t["b"].gaps(), 0);
+  EXPECT_EQ(t["b"].Held("a"), 0U);
+  t.Run(told, {});
+  EXPECT_EQ(t["b"].Held("a"), told);
+  // Once made good, only the new steps travel.
+  for (const auto& b : t.Run(told + 1, {})) {
+    if (b.header.sender == "a") {
+      EXPECT_EQ(b.runs.at(0).steps.size(), 1U);
+    }
+  }
+}
+
+TEST(FactorExchange, AStepReachingAnAgentTwiceEntersOnce) {
+  ThreeAgents t;
+  // a meets b and c at once; then b and c meet: each has a's steps, and each sends them on only
+  // if the other lacks them, and any that come twice are taken once.
+  for (std::uint32_t k = 1; k <= 3; ++k) t.Run(k, {{"a", {"b", "c"}}, {"b", {"a"}}, {"c", {"a"}}});
+  for (std::uint32_t k = 4; k <= 12; ++k) t.Run(k, Mutual("b", "c"));
+  EXPECT_EQ(t["b"].Held("a"), 3U + kWindow);
+  EXPECT_EQ(t["c"].Held("a"), 3U + kWindow);
+  EXPECT_EQ(t["c"].steps_received(), t["c"].Held("a") + t["c"].Held("b"));
+}
+
+class RejectedBatch : public ::testing::Test {
+ protected:
+  // b's valid batch to a after step 5, having seen a at step 5.
+  void SetUp() override {
+    for (std::uint32_t k = 1; k <= 5; ++k)
+      b_.RecordOwn(Step("b", k, k == 5 ? std::vector<std::string>{"a"} : std::vector<std::string>{}));
+    const auto out = b_.Outgoing(5, 0.5);
+    ASSERT_EQ(out.size(), 1U);
+    good_ = out[0];
+  }
+  void ExpectRejected(const FactorBatch& batch) {
+    FactorExchange a(Options("a"));
+    EXPECT_FALSE(a.Receive(batch));
+    EXPECT_EQ(a.Held("b"), 0U) << "a rejected batch leaves nothing";
+  }
+  FactorExchange b_{Options("b")};
+  FactorBatch good_;
+};
+
+TEST_F(RejectedBatch, TheGoodOneIsTaken) {
+  FactorExchange a(Options("a"));
+  EXPECT_TRUE(a.Receive(good_));
+  EXPECT_EQ(a.Held("b"), 5U);
+}
+
+TEST_F(RejectedBatch, NotOpenedByADetectionOfTheRecipient) {
+  FactorBatch forged = good_;
+  forged.runs[0].steps[4].lidar.robots.clear();
+  ExpectRejected(forged);
+  forged = good_;
+  forged.opened_by_step = 3;  // step 3 saw nobody
+  ExpectRejected(forged);
+  forged = good_;
+  forged.header.step = 5 + kWindow + 1;  // long after the detection
+  ExpectRejected(forged);
+}
+
+TEST_F(RejectedBatch, OneWhoseOpeningStepIsMissingIsAGapNotARejection) {
+  // What b sends after a lost batch: its steps from 6 on, the detection of step 5 not carried.
+  FactorBatch later = good_;
+  later.runs[0].first_step = 6;
+  later.runs[0].steps = {Step("b", 6)};
+  later.header.step = 6;
+  FactorExchange a(Options("a"));
+  EXPECT_TRUE(a.Receive(later));
+  EXPECT_EQ(a.gaps(), 1);
+  EXPECT_EQ(a.Held("b"), 0U);
+  // With the opening step carried apart, the detection is checked (and the run is a gap).
+  later.opening = {good_.runs[0].steps[4]};
+  EXPECT_TRUE(a.Receive(later));
+  EXPECT_EQ(a.gaps(), 2);
+  later.opening[0].lidar.robots.clear();
+  EXPECT_FALSE(a.Receive(later));
+}
+
+TEST_F(RejectedBatch, Malformed) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  FactorBatch bad = good_;
+  bad.runs[0].steps[2].lidar.landmarks[0].range_m = nan;
+  ExpectRejected(bad);
+  bad = good_;
+  bad.runs[0].steps[2].odometry.segments[0].v_mps = std::numeric_limits<double>::infinity();
+  ExpectRejected(bad);
+  bad = good_;
+  bad.runs[0].steps[2].lidar.landmarks[0].landmark_id = -1;  // unlabelled
+  ExpectRejected(bad);
+  bad = good_;
+  bad.runs[0].steps[2].lidar.stamp.step = 9;  // out of sequence
+  ExpectRejected(bad);
+  bad = good_;
+  bad.runs[0].first_pose.heading = nan;
+  ExpectRejected(bad);
+  bad = good_;
+  bad.runs[0].origin = "z";  // not of the team
+  ExpectRejected(bad);
+  bad = good_;
+  bad.runs.push_back(bad.runs[0]);  // an origin twice
+  ExpectRejected(bad);
+  bad = good_;
+  bad.runs[0].steps.resize(51, bad.runs[0].steps[0]);  // beyond max_batch_steps
+  ExpectRejected(bad);
+}
+
+TEST_F(RejectedBatch, TheRecipientsOwnStepsOrRelayedOnesWhenRelayingIsOff) {
+  FactorBatch own = good_;
+  FactorRun mine{"a", 1, {}, {Step("a", 1)}};
+  own.runs.push_back(mine);
+  ExpectRejected(own);
+  FactorBatch relayed = good_;
+  relayed.runs.push_back({"c", 1, {}, {Step("c", 1)}});
+  FactorExchange a(Options("a"));
+  EXPECT_TRUE(a.Receive(relayed));
+  EXPECT_EQ(a.Held("c"), 1U);
+  FactorExchange no_relay(Options("a", /*relay=*/false));
+  EXPECT_FALSE(no_relay.Receive(relayed));
+}
+
+TEST(FactorExchange, ComesBackFromAnArchiveAsItWas) {
+  ThreeAgents t;
+  for (std::uint32_t k = 1; k <= 6; ++k) t.Run(k, Mutual("a", "b"));
+  common::Archive out = common::Archive::ForWriting();
+  t["b"].Io(out);
+  FactorExchange back(Options("b"));
+  common::Archive in = common::Archive::ForReading(out.bytes());
+  back.Io(in);
+  EXPECT_TRUE(in.AtEnd());
+  EXPECT_EQ(back.Held("a"), 6U);
+  EXPECT_EQ(back.Held("b"), 6U);
+  // It goes on as the original does.
+  t["b"].RecordOwn(Step("b", 7, {"a"}));
+  back.RecordOwn(Step("b", 7, {"a"}));
+  const auto x = t["b"].Outgoing(7, 0.7);
+  const auto y = back.Outgoing(7, 0.7);
+  ASSERT_EQ(x.size(), y.size());
+  ASSERT_EQ(x.size(), 1U);
+  EXPECT_EQ(x[0].runs.size(), y[0].runs.size());
+  EXPECT_EQ(x[0].runs[0].first_step, y[0].runs[0].first_step);
+}
+
+}  // namespace
+}  // namespace mrslam::robot_agent::cooperation
