@@ -120,7 +120,7 @@ std::optional<FactorBatch> FactorExchange::BatchFor(const std::string& peer, std
     if (origin == peer || budget == 0) continue;
     const FactorLog& log = logs_.at(origin);
     const std::uint32_t from = SendFrom(peer, origin);
-    if (from >= log.Held()) continue;
+    if (from >= log.Held() || (origin != self_ && log.Held() - from <= kRelayLagSteps)) continue;
     const std::uint32_t to = std::min<std::uint32_t>(log.Held(), from + static_cast<std::uint32_t>(budget));
     FactorRun run{origin, from + 1, log.first_pose, {}};
     run.steps.assign(log.steps.begin() + from, log.steps.begin() + to);

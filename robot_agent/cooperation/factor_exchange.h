@@ -47,7 +47,9 @@ bool SharedStepValid(const common::SensorStep& s, std::uint32_t step);
 // cooperation.exchange_window_steps before k (from rendezvous.enable_from_step on), one batch
 // with the steps that peer lacks: of every origin it holds (only its own with relaying off), but
 // the peer's own, from what was sent before (taken as on its way), at most
-// cooperation.max_batch_steps steps in all, its own origin first. What does not fit goes at the
+// cooperation.max_batch_steps steps in all, its own origin first. Another origin's steps go only
+// once the peer lacks more than kRelayLagSteps of them: a peer that lacks fewer most likely gets
+// them from the origin itself or from another relay, and sending them too would double them. What does not fit goes at the
 // next step of the window or of the next one. A batch the peer sent at step h tells what it
 // holds after the batches sent to it up to step h - kAckLagSteps: when it holds less of an
 // origin than those sent (a batch was lost), the sending starts again from what it holds.
@@ -62,6 +64,7 @@ bool SharedStepValid(const common::SensorStep& s, std::uint32_t step);
 class FactorExchange {
  public:
   static constexpr std::uint32_t kAckLagSteps = 2;
+  static constexpr std::uint32_t kRelayLagSteps = 10;
 
   explicit FactorExchange(const AgentOptions& options);
 

@@ -461,6 +461,38 @@ struct AgentNode::Impl {
   }
 
   // Processes the next step if all of it is here. Returns true if it did.
+  // Applies the peer messages of step k-1, in a fixed order (sender, then sequence); also when
+  // none came, as the own detections of the last step may pair with a peer's held ones.
+  void ApplyPeerMessages(std::uint32_t k) {
+    cooperation::PeerInbox in;
+    if (auto it = inbox.find(k - 1); it != inbox.end()) {
+      in = std::move(it->second);
+      inbox.erase(it);
+    }
+    SortBySender(&in);
+    const int before = cooperation.rejected_messages();
+    const int stale_before = cooperation.stale_messages();
+    const std::size_t joint_before = cooperation.joint_estimates().size();
+    cooperation.Receive(in, filter.get());
+    const int stale = cooperation.stale_messages() - stale_before;
+    if (const int bad = cooperation.rejected_messages() - before - stale; bad > 0) {
+      Reject(cooperation::Rejection::kMalformed, fmt::format("{} peer message(s) of step {}", bad, k - 1),
+             static_cast<std::uint32_t>(bad));
+    }
+    if (stale > 0) {
+      Reject(cooperation::Rejection::kStale,
+             fmt::format("{} peer message(s) of step {} out of order (older than one applied, or from a peer "
+                         "whose frame is not known yet)",
+                         stale, k - 1),
+             static_cast<std::uint32_t>(stale));
+    }
+    for (std::size_t i = joint_before; i < cooperation.joint_estimates().size(); ++i) {
+      const auto& t = cooperation.joint_estimates()[i];
+      spdlog::info("joint transform from both histories at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)", t.step,
+                   agent.robot_id, t.peer, t.t_self_peer.x, t.t_self_peer.y, t.t_self_peer.heading);
+    }
+  }
+
   bool TryProcess(bool* last) {
     const std::uint32_t k = next_step;
     const auto& sim = simulator.simulator();
@@ -468,32 +500,7 @@ struct AgentNode::Impl {
     if (!PeerMessagesComplete(clock[k])) return false;
     CheckPeerCounts(clock[k]);
     const double cpu_start_s = common::ThreadCpuSeconds();
-    // Peer messages of step k-1 first, in a fixed order (sender, then sequence).
-    if (auto it = inbox.find(k - 1); it != inbox.end()) {
-      SortBySender(&it->second);
-      const int before = cooperation.rejected_messages();
-      const int stale_before = cooperation.stale_messages();
-      const std::size_t joint_before = cooperation.joint_estimates().size();
-      cooperation.Receive(it->second, filter.get());
-      const int stale = cooperation.stale_messages() - stale_before;
-      if (const int bad = cooperation.rejected_messages() - before - stale; bad > 0) {
-        Reject(cooperation::Rejection::kMalformed, fmt::format("{} peer message(s) of step {}", bad, k - 1),
-               static_cast<std::uint32_t>(bad));
-      }
-      if (stale > 0) {
-        Reject(cooperation::Rejection::kStale,
-               fmt::format("{} peer message(s) of step {} out of order (older than one applied, or from a peer "
-                           "whose frame is not known yet)",
-                           stale, k - 1),
-               static_cast<std::uint32_t>(stale));
-      }
-      for (std::size_t i = joint_before; i < cooperation.joint_estimates().size(); ++i) {
-        const auto& t = cooperation.joint_estimates()[i];
-        spdlog::info("joint transform from both histories at step {}: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad)",
-                     t.step, agent.robot_id, t.peer, t.t_self_peer.x, t.t_self_peer.y, t.t_self_peer.heading);
-      }
-      inbox.erase(it);
-    }
+    ApplyPeerMessages(k);
     const std::uint32_t foreign_before = counters.rejected.Of(cooperation::Rejection::kForeignWriter);
     common::SensorStep step{lidar.Take(k, *sim, &counters.rejected), imu.Take(k, *sim, &counters.rejected),
                             odometry.Take(k, *sim, &counters.rejected)};

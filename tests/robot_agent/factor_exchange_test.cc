@@ -103,28 +103,44 @@ TEST(FactorExchange, SendsWhatThePeerLacksOnlyWithinTheWindowOfADetection) {
   }
 }
 
+// a and b together for steps 1..kMet, b and c from step 30 on: b holds a's steps up to the end
+// of their window.
+constexpr std::uint32_t kMet = 10;
+static_assert(kMet + kWindow > FactorExchange::kRelayLagSteps, "what b holds of a must be worth relaying");
+
 TEST(FactorExchange, RelaysToARobotThatNeverMetTheOrigin) {
   ThreeAgents t;
-  for (std::uint32_t k = 1; k <= 3; ++k) t.Run(k, Mutual("a", "b"));
-  for (std::uint32_t k = 4; k <= 20; ++k) {
-    for (const auto& b : t.Run(k, k >= 15 ? Mutual("b", "c") : std::map<std::string, std::vector<std::string>>{})) {
+  for (std::uint32_t k = 1; k <= kMet; ++k) t.Run(k, Mutual("a", "b"));
+  for (std::uint32_t k = kMet + 1; k <= 35; ++k) {
+    for (const auto& b : t.Run(k, k >= 30 ? Mutual("b", "c") : std::map<std::string, std::vector<std::string>>{})) {
       EXPECT_FALSE((b.header.sender == "a" && b.header.recipient == "c") ||
                    (b.header.sender == "c" && b.header.recipient == "a"));
     }
   }
-  // b held a's steps up to the end of their window (3 + kWindow); c has them all through b.
-  EXPECT_EQ(t["b"].Held("a"), 3U + kWindow);
-  EXPECT_EQ(t["c"].Held("a"), 3U + kWindow);
+  EXPECT_EQ(t["b"].Held("a"), kMet + kWindow);
+  EXPECT_EQ(t["c"].Held("a"), kMet + kWindow);  // all of it, through b
   EXPECT_EQ(t["a"].Held("c"), 0U);
 }
 
 TEST(FactorExchange, WithoutRelayingOnlyTheOwnStepsTravel) {
   ThreeAgents t(/*relay=*/false);
-  for (std::uint32_t k = 1; k <= 3; ++k) t.Run(k, Mutual("a", "b"));
-  for (std::uint32_t k = 4; k <= 20; ++k) t.Run(k, k >= 15 ? Mutual("b", "c") : decltype(Mutual("b", "c")){});
-  EXPECT_EQ(t["b"].Held("a"), 3U + kWindow);
+  for (std::uint32_t k = 1; k <= kMet; ++k) t.Run(k, Mutual("a", "b"));
+  for (std::uint32_t k = kMet + 1; k <= 35; ++k) t.Run(k, k >= 30 ? Mutual("b", "c") : decltype(Mutual("b", "c")){});
+  EXPECT_EQ(t["b"].Held("a"), kMet + kWindow);
   EXPECT_EQ(t["c"].Held("a"), 0U);
-  EXPECT_EQ(t["c"].Held("b"), 20U);
+  EXPECT_EQ(t["c"].Held("b"), 35U);
+}
+
+TEST(FactorExchange, APeerThatHearsTheOriginItselfGetsNoRelayedCopies) {
+  ThreeAgents t;
+  const std::map<std::string, std::vector<std::string>> all = {{"a", {"b", "c"}}, {"b", {"a", "c"}}, {"c", {"a", "b"}}};
+  for (std::uint32_t k = 1; k <= 40; ++k) {
+    for (const auto& b : t.Run(k, all)) {
+      for (const auto& run : b.runs) EXPECT_EQ(run.origin, b.header.sender) << "relayed at step " << k;
+    }
+  }
+  EXPECT_EQ(t["c"].Held("a"), 40U);
+  EXPECT_EQ(t["c"].steps_received(), 80U);
 }
 
 TEST(FactorExchange, ALostBatchIsMadeGood) {
