@@ -90,7 +90,7 @@ std::vector<std::string> FactorExchange::SendOrder() const {
 }
 
 std::uint32_t FactorExchange::SendFrom(const std::string& peer, const std::string& origin) {
-  const std::uint32_t holds = peer_holdings_[peer][origin];
+  const std::uint32_t holds = peer_holdings_[peer][origin].steps;
   auto& sends = sends_[peer][origin];
   if (sends.empty()) return holds;
   // The newest send the peer's newest batch must reflect.
@@ -110,31 +110,49 @@ std::uint32_t FactorExchange::SendFrom(const std::string& peer, const std::strin
   return std::max(holds, sends.rbegin()->second);
 }
 
-std::optional<FactorBatch> FactorExchange::BatchFor(const std::string& peer, std::uint32_t k, double time_s) {
-  FactorBatch batch;
-  batch.header = {self_, peer, k, time_s, 0};
-  batch.opened_by_step = detected_at_.at(peer);
-  for (const auto& [origin, log] : logs_) batch.holdings.push_back({origin, log.Held()});
+bool FactorExchange::FedByAnother(const std::string& peer, const std::string& origin, std::uint32_t k) {
+  const FactorHolding& h = peer_holdings_[peer][origin];
+  const auto heard = holdings_step_.find(peer);
+  // h.fed_at is a step of the feeder's; the robots step together, so it compares with k.
+  return !h.fed_by.empty() && h.fed_by != self_ && heard != holdings_step_.end() && h.fed_at + kAckLagSteps + 1 >= k;
+}
+
+void FactorExchange::AddRuns(const std::string& peer, std::uint32_t k, FactorBatch* batch) {
   auto budget = static_cast<std::size_t>(options_.cooperation.max_batch_steps);
   for (const auto& origin : SendOrder()) {
     if (origin == peer || budget == 0) continue;
     const FactorLog& log = logs_.at(origin);
     const std::uint32_t from = SendFrom(peer, origin);
-    if (from >= log.Held() || (origin != self_ && log.Held() - from <= kRelayLagSteps)) continue;
+    if (from >= log.Held()) continue;
+    if (origin != self_ && (log.Held() - from <= kRelayLagSteps || FedByAnother(peer, origin, k))) continue;
     const std::uint32_t to = std::min<std::uint32_t>(log.Held(), from + static_cast<std::uint32_t>(budget));
     FactorRun run{origin, from + 1, log.first_pose, {}};
     run.steps.assign(log.steps.begin() + from, log.steps.begin() + to);
     budget -= run.steps.size();
+    steps_sent_ += run.steps.size();
     sends_[peer][origin][k] = to;
-    batch.runs.push_back(std::move(run));
+    batch->runs.push_back(std::move(run));
   }
-  if (batch.runs.empty()) return std::nullopt;
-  const FactorRun& own = batch.runs.front();
-  const bool carried = own.origin == self_ && batch.opened_by_step >= own.first_step &&
-                       batch.opened_by_step - own.first_step < own.steps.size();
-  if (!carried && peer_holdings_[peer][self_] < batch.opened_by_step) {
+}
+
+std::optional<FactorBatch> FactorExchange::BatchFor(const std::string& peer, std::uint32_t k, double time_s) {
+  if (last_batch_[peer] + 1 < k) session_start_[peer] = k;  // a new session
+  FactorBatch batch;
+  batch.header = {self_, peer, k, time_s, 0};
+  batch.opened_by_step = detected_at_.at(peer);
+  for (const auto& [origin, log] : logs_) batch.holdings.push_back({origin, log.Held(), log.fed_by, log.fed_at});
+  const auto heard = holdings_step_.find(peer);
+  const bool news = heard != holdings_step_.end() && heard->second >= session_start_[peer];
+  const bool greeting = !news && k <= session_start_[peer] + kAckLagSteps;
+  if (!greeting) AddRuns(peer, k, &batch);
+  if (batch.runs.empty() && !greeting) return std::nullopt;
+  const FactorRun* own = batch.runs.empty() || batch.runs.front().origin != self_ ? nullptr : &batch.runs.front();
+  const bool carried = own != nullptr && batch.opened_by_step >= own->first_step &&
+                       batch.opened_by_step - own->first_step < own->steps.size();
+  if (!carried && peer_holdings_[peer][self_].steps < batch.opened_by_step) {
     batch.opening.push_back(logs_.at(self_).steps.at(batch.opened_by_step - 1));
   }
+  last_batch_[peer] = k;
   return batch;
 }
 
@@ -157,6 +175,7 @@ bool FactorExchange::BatchValid(const FactorBatch& b) const {
   std::set<std::string> seen;
   for (const auto& h : b.holdings) {
     if (options_.TeamIndex(h.origin) < 0 || !seen.insert(h.origin).second) return false;
+    if (!h.fed_by.empty() && options_.TeamIndex(h.fed_by) < 0) return false;
   }
   seen.clear();
   std::size_t steps = 0;
@@ -185,7 +204,7 @@ const common::SensorStep* FactorExchange::Opening(const FactorBatch& b) const {
   return b.opening.empty() ? nullptr : &b.opening.front();
 }
 
-void FactorExchange::Apply(const FactorRun& run) {
+void FactorExchange::Apply(const FactorRun& run, const PeerHeader& from) {
   FactorLog& log = logs_[run.origin];
   const std::uint32_t held = log.Held();
   if (run.first_step > held + 1) {
@@ -194,8 +213,11 @@ void FactorExchange::Apply(const FactorRun& run) {
   }
   if (held == 0) log.first_pose = run.first_pose;
   const std::size_t skip = held + 1 - run.first_step;
+  steps_again_ += std::min(skip, run.steps.size());
   if (skip >= run.steps.size()) return;
   log.steps.insert(log.steps.end(), run.steps.begin() + static_cast<std::ptrdiff_t>(skip), run.steps.end());
+  log.fed_by = from.sender;
+  log.fed_at = from.step;
   steps_received_ += run.steps.size() - skip;
 }
 
@@ -214,9 +236,9 @@ bool FactorExchange::Receive(const FactorBatch& batch) {
     holdings_step_[sender] = batch.header.step;
     auto& holdings = peer_holdings_[sender];
     holdings.clear();
-    for (const auto& h : batch.holdings) holdings[h.origin] = h.steps;
+    for (const auto& h : batch.holdings) holdings[h.origin] = h;
   }
-  for (const auto& run : batch.runs) Apply(run);
+  for (const auto& run : batch.runs) Apply(run, batch.header);
   return true;
 }
 

@@ -26,9 +26,11 @@ namespace mrslam::robot_agent::cooperation {
 struct FactorLog {
   common::Pose2 first_pose;
   std::vector<common::SensorStep> steps;
+  std::string fed_by;        // the peer that last sent new steps of it (empty: none, the own log)
+  std::uint32_t fed_at = 0;  // the step of that peer's batch
 
   std::uint32_t Held() const { return static_cast<std::uint32_t>(steps.size()); }
-  void Io(common::Archive& ar) { ar(first_pose, steps); }
+  void Io(common::Archive& ar) { ar(first_pose, steps, fed_by, fed_at); }
 };
 
 // The step as a shared measurement: its odometry, its robot detections and its landmark
@@ -44,14 +46,18 @@ bool SharedStepValid(const common::SensorStep& s, std::uint32_t step);
 // An agent's side of the exchange. Pure; not thread-safe.
 //
 // Sending: after step k, to every peer its own lidar detected at a step within
-// cooperation.exchange_window_steps before k (from rendezvous.enable_from_step on), one batch
-// with the steps that peer lacks: of every origin it holds (only its own with relaying off), but
+// cooperation.exchange_window_steps before k (from rendezvous.enable_from_step on), one batch.
+// A session of batches to a peer (steps in a row) starts with a greeting: for kAckLagSteps + 1
+// steps, or until the peer's own batch of the session says what it holds, the batch carries no
+// steps, as the peer may have had them from others meanwhile. Then it carries the steps that peer
+// lacks: of every origin it holds (only its own with relaying off), but
 // the peer's own, from what was sent before (taken as on its way), at most
 // cooperation.max_batch_steps steps in all, its own origin first. Another origin's steps go only
 // once the peer lacks more than kRelayLagSteps of them: a peer that lacks fewer most likely gets
-// them from the origin itself or from another relay, and sending them too would double them. What does not fit goes at the
-// next step of the window or of the next one. A batch the peer sent at step h tells what it
-// holds after the batches sent to it up to step h - kAckLagSteps: when it holds less of an
+// them from the origin itself or from another relay, and sending them too would double them. What does not fit goes at
+// the next step of the window or of the next one. Nor does another origin's step go to a peer that says another robot
+// sent it new steps of that origin within the last kAckLagSteps + 1 steps (it is being fed them). A batch the peer sent
+// at step h tells what it holds after the batches sent to it up to step h - kAckLagSteps: when it holds less of an
 // origin than those sent (a batch was lost), the sending starts again from what it holds.
 // Receiving: a batch is rejected whole (and counted) unless it is well formed and within its
 // window: opened_by_step no later than the batch's step and at most exchange_window_steps before
@@ -81,21 +87,28 @@ class FactorExchange {
   const std::map<std::string, FactorLog>& logs() const { return logs_; }
   std::uint32_t Held(const std::string& origin) const;
   int gaps() const { return gaps_; }
-  // Steps taken in from peers (each once).
+  // Steps taken in from peers (each once), steps that came again (already held), steps sent.
   std::uint64_t steps_received() const { return steps_received_; }
+  std::uint64_t steps_again() const { return steps_again_; }
+  std::uint64_t steps_sent() const { return steps_sent_; }
 
   void Io(common::Archive& ar) {
-    ar(logs_, own_growing_, detected_at_, peer_holdings_, holdings_step_, sends_, gaps_, steps_received_);
+    ar(logs_, own_growing_, detected_at_, peer_holdings_, holdings_step_, sends_, session_start_, last_batch_, gaps_,
+       steps_received_, steps_again_, steps_sent_);
   }
 
  private:
   bool BatchValid(const FactorBatch& b) const;
   // The sender's step opened_by_step: held, in the batch's runs or its opening; nullptr if none.
   const common::SensorStep* Opening(const FactorBatch& b) const;
-  void Apply(const FactorRun& run);
+  void Apply(const FactorRun& run, const PeerHeader& from);
+  // Whether peer is being fed origin's steps by a robot other than this one (as of step k).
+  bool FedByAnother(const std::string& peer, const std::string& origin, std::uint32_t k);
   // The origins to send, in order: the own, then the others in team order.
   std::vector<std::string> SendOrder() const;
   std::optional<FactorBatch> BatchFor(const std::string& peer, std::uint32_t k, double time_s);
+  // The runs of the steps peer lacks, at most max_batch_steps steps in all.
+  void AddRuns(const std::string& peer, std::uint32_t k, FactorBatch* batch);
   // The first step of origin to send peer: past what it holds or was sent, or from what it
   // holds again when its newest batch shows a loss.
   std::uint32_t SendFrom(const std::string& peer, const std::string& origin);
@@ -107,11 +120,13 @@ class FactorExchange {
   std::map<std::string, std::uint32_t> detected_at_;  // per peer: the last own step detecting it
   // Per peer and origin: the count it last said it holds (of its newest batch, sent at
   // holdings_step_), and what was sent to it (by the step sent at: steps 1..n sent).
-  std::map<std::string, std::map<std::string, std::uint32_t>> peer_holdings_;
+  std::map<std::string, std::map<std::string, FactorHolding>> peer_holdings_;
   std::map<std::string, std::uint32_t> holdings_step_;
   std::map<std::string, std::map<std::string, std::map<std::uint32_t, std::uint32_t>>> sends_;
+  // Per peer: the step of the first batch of the current session, and of the last batch.
+  std::map<std::string, std::uint32_t> session_start_, last_batch_;
   int gaps_ = 0;
-  std::uint64_t steps_received_ = 0;
+  std::uint64_t steps_received_ = 0, steps_again_ = 0, steps_sent_ = 0;
 };
 
 }  // namespace mrslam::robot_agent::cooperation

@@ -73,10 +73,13 @@ struct FactorRun {
   std::vector<common::SensorStep> steps;
 };
 
-// How many steps of an origin the sender holds.
+// How many steps of an origin the sender holds, and who last sent it new ones of that origin at
+// which of the sender's steps (empty, 0: nobody, or they are its own).
 struct FactorHolding {
   std::string origin;
   std::uint32_t steps = 0;
+  std::string fed_by;
+  std::uint32_t fed_at = 0;
 };
 
 // What one agent sends another after a step: the steps the recipient lacks, as far as the sender
@@ -124,7 +127,7 @@ inline void Io(common::Archive& ar, LandmarkMovedNotice& n) {
   ar(n.header, n.track_id, n.landmark_id, n.position_in_sender);
 }
 inline void Io(common::Archive& ar, FactorRun& r) { ar(r.origin, r.first_step, r.first_pose, r.steps); }
-inline void Io(common::Archive& ar, FactorHolding& h) { ar(h.origin, h.steps); }
+inline void Io(common::Archive& ar, FactorHolding& h) { ar(h.origin, h.steps, h.fed_by, h.fed_at); }
 inline void Io(common::Archive& ar, FactorBatch& b) { ar(b.header, b.opened_by_step, b.holdings, b.runs, b.opening); }
 
 inline void Io(common::Archive& ar, PeerOutbox& o) { ar(o.measurements, o.maps, o.moved, o.factors); }

@@ -411,7 +411,9 @@ struct AgentNode::Impl {
     const std::string path = cooperation::HeldFactorsPath(options.factors_dir, agent.robot_id);
     cooperation::WriteHeldFactors(path, k,
                                   {agent.robot_id, cooperation.exchange().logs(), bytes_sent_to, bytes_received_from});
-    spdlog::info("wrote the raw measurements held ({} robots) to {}", cooperation.exchange().logs().size(), path);
+    const auto& x = cooperation.exchange();
+    spdlog::info("wrote the raw measurements held ({} robots) to {}; steps sent {}, taken in {}, received again {}",
+                 x.logs().size(), path, x.steps_sent(), x.steps_received(), x.steps_again());
   }
 
   std::string SnapshotPath() const {

@@ -135,6 +135,8 @@ msg::FactorBatch ToMsg(const cooperation::FactorBatch& b) {
     msg::FactorHolding mh;
     mh.origin_id(h.origin);
     mh.steps(h.steps);
+    mh.fed_by(h.fed_by);
+    mh.fed_at(h.fed_at);
     m.holdings().push_back(std::move(mh));
   }
   for (const auto& r : b.runs) {
@@ -152,7 +154,7 @@ cooperation::FactorBatch FromMsg(const msg::FactorBatch& m) {
   cooperation::FactorBatch b;
   b.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
   b.opened_by_step = m.opened_by_step();
-  for (const auto& h : m.holdings()) b.holdings.push_back({h.origin_id(), h.steps()});
+  for (const auto& h : m.holdings()) b.holdings.push_back({h.origin_id(), h.steps(), h.fed_by(), h.fed_at()});
   for (const auto& mr : m.runs()) {
     cooperation::FactorRun r{mr.origin_id(), mr.first_step(), dds::FromMsg(mr.first_pose()), {}};
     for (const auto& h : mr.steps()) r.steps.push_back(FromHistoryStep(h));

@@ -62,7 +62,7 @@ void WritePeerMessages(const std::string& dir) {
   robot_agent::cooperation::FactorBatch batch;
   batch.header = Header();
   batch.opened_by_step = 4;
-  batch.holdings = {{"r2", 4}};
+  batch.holdings = {{"r2", 4, "", 0}};
   robot_agent::cooperation::FactorRun run{"r2", 4, {0.0, 0.0, 0.0}, {}};
   common::SensorStep step;
   step.lidar.stamp = {"r2", 4, 2.6};

@@ -77,12 +77,17 @@ std::map<std::string, std::vector<std::string>> Mutual(const std::string& x, con
 TEST(FactorExchange, SendsWhatThePeerLacksOnlyWithinTheWindowOfADetection) {
   ThreeAgents t;
   for (std::uint32_t k = 1; k <= 4; ++k) EXPECT_TRUE(t.Run(k, {}).empty()) << "nobody has met at step " << k;
+  // A greeting first: what each holds, no steps (the other may have had them from others).
   const auto first = t.Run(5, Mutual("a", "b"));
   ASSERT_EQ(first.size(), 2U);
-  EXPECT_EQ(t["b"].Held("a"), 5U);
-  EXPECT_EQ(t["a"].Held("b"), 5U);
-  // Each next step of the window carries only the new step.
-  for (std::uint32_t k = 6; k <= 5 + kWindow; ++k) {
+  EXPECT_TRUE(first[0].runs.empty() && first[1].runs.empty());
+  EXPECT_EQ(t["b"].Held("a"), 0U);
+  // Told, each sends what the other lacks,
+  t.Run(6, {});
+  EXPECT_EQ(t["b"].Held("a"), 6U);
+  EXPECT_EQ(t["a"].Held("b"), 6U);
+  // then, at each next step of the window, only the new step.
+  for (std::uint32_t k = 7; k <= 5 + kWindow; ++k) {
     for (const auto& b : t.Run(k, {})) {
       ASSERT_EQ(b.runs.size(), 1U);
       EXPECT_EQ(b.runs[0].first_step, k);
@@ -122,6 +127,19 @@ TEST(FactorExchange, RelaysToARobotThatNeverMetTheOrigin) {
   EXPECT_EQ(t["a"].Held("c"), 0U);
 }
 
+TEST(FactorExchange, AtAFirstContactOnlyWhatThePeerLacksTravels) {
+  ThreeAgents t;
+  for (std::uint32_t k = 1; k <= kMet; ++k) t.Run(k, Mutual("a", "b"));
+  for (std::uint32_t k = kMet + 1; k <= 49; ++k)
+    t.Run(k, k >= 30 && k < 36 ? Mutual("b", "c") : decltype(Mutual("b", "c")){});
+  ASSERT_EQ(t["c"].Held("a"), kMet + kWindow);
+  // a and c meet: after the greetings a sends c its steps from kMet + kWindow + 1 on, none twice.
+  for (std::uint32_t k = 50; k <= 55; ++k) t.Run(k, Mutual("a", "c"));
+  EXPECT_EQ(t["c"].Held("a"), 55U);
+  EXPECT_EQ(t["c"].steps_again(), 0U);
+  EXPECT_EQ(t["a"].steps_again(), 0U);
+}
+
 TEST(FactorExchange, WithoutRelayingOnlyTheOwnStepsTravel) {
   ThreeAgents t(/*relay=*/false);
   for (std::uint32_t k = 1; k <= kMet; ++k) t.Run(k, Mutual("a", "b"));
@@ -146,12 +164,13 @@ TEST(FactorExchange, APeerThatHearsTheOriginItselfGetsNoRelayedCopies) {
 TEST(FactorExchange, ALostBatchIsMadeGood) {
   ThreeAgents t;
   for (std::uint32_t k = 1; k <= 4; ++k) t.Run(k, {});
-  // a's first batch to b is lost; the next one starts beyond what b holds (a gap) until b's
+  t.Run(5, Mutual("a", "b"));  // the greetings
+  // a's first batch with steps is lost; the next ones start beyond what b holds (gaps) until b's
   // batches tell a what b holds, and a sends from there.
-  t.Run(5, Mutual("a", "b"), [](const FactorBatch& b) { return b.header.sender == "a"; });
+  t.Run(6, {}, [](const FactorBatch& b) { return b.header.sender == "a"; });
   EXPECT_EQ(t["b"].Held("a"), 0U);
-  const std::uint32_t told = 5 + FactorExchange::kAckLagSteps + 1;  // b's batch of step 6 is heard
-  for (std::uint32_t k = 6; k < told; ++k) t.Run(k, {});
+  const std::uint32_t told = 6 + FactorExchange::kAckLagSteps + 1;  // b's batch of step 8 is heard
+  for (std::uint32_t k = 7; k < told; ++k) t.Run(k, {});
   EXPECT_GT(t["b"].gaps(), 0);
   EXPECT_EQ(t["b"].Held("a"), 0U);
   t.Run(told, {});
@@ -177,13 +196,18 @@ TEST(FactorExchange, AStepReachingAnAgentTwiceEntersOnce) {
 
 class RejectedBatch : public ::testing::Test {
  protected:
-  // b's valid batch to a after step 5, having seen a at step 5.
+  // b's batch to a after step 8, having seen a at step 5 and had no word from a: its greetings
+  // of steps 5 to 7, then its steps.
   void SetUp() override {
-    for (std::uint32_t k = 1; k <= 5; ++k)
+    for (std::uint32_t k = 1; k <= 8; ++k) {
       b_.RecordOwn(Step("b", k, k == 5 ? std::vector<std::string>{"a"} : std::vector<std::string>{}));
-    const auto out = b_.Outgoing(5, 0.5);
-    ASSERT_EQ(out.size(), 1U);
-    good_ = out[0];
+      const auto out = b_.Outgoing(k, 0.1 * k);
+      ASSERT_EQ(out.size(), k < 5 ? 0U : 1U) << "step " << k;
+      if (k < 8) continue;
+      good_ = out[0];
+      ASSERT_EQ(good_.runs.size(), 1U);
+      ASSERT_EQ(good_.runs[0].steps.size(), 8U);
+    }
   }
   void ExpectRejected(const FactorBatch& batch) {
     FactorExchange a(Options("a"));
@@ -197,7 +221,7 @@ class RejectedBatch : public ::testing::Test {
 TEST_F(RejectedBatch, TheGoodOneIsTaken) {
   FactorExchange a(Options("a"));
   EXPECT_TRUE(a.Receive(good_));
-  EXPECT_EQ(a.Held("b"), 5U);
+  EXPECT_EQ(a.Held("b"), 8U);
 }
 
 TEST_F(RejectedBatch, NotOpenedByADetectionOfTheRecipient) {
