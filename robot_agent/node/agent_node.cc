@@ -475,6 +475,7 @@ struct AgentNode::Impl {
     m.frames_known(cooperation.frames_known());
     m.rejected_samples(counters.rejected.Total());
     m.step_cpu_ms(step_cpu_ms);
+    m.estimator_bytes(filter->EstimatorBytes());
     step_times[k] = time_s;
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));

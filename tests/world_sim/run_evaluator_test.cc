@@ -50,8 +50,9 @@ class RunEvaluatorTest : public ::testing::Test {
       r1.landmarks = {{Eigen::Vector2d(1.0, 0.0), 1}};
       r2.landmarks = {{Eigen::Vector2d(1.0, 0.0), 2}};  // in r2's own frame
       r1.frames_known = r1_frames_known;
-      r1.rejected_samples = 2 * step;     // the agent's running count
-      r1.step_cpu_ms = 1.0 + 2.0 * step;  // 1 and 3 ms
+      r1.rejected_samples = 2 * step;           // the agent's running count
+      r1.step_cpu_ms = 1.0 + 2.0 * step;        // 1 and 3 ms
+      r1.estimator_bytes = 3000 - 1000 * step;  // 3000 and 2000 bytes: the most came first
       evaluator.AddEstimate("r1", r1);
       evaluator.AddEstimate("r2", r2);
       if (step > 0) {  // standing still
@@ -92,6 +93,14 @@ TEST_F(RunEvaluatorTest, StepCpuTimeIsSummarizedByMedianAndP99) {
   EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["step_cpu_ms_median"].get<double>(), 2.0);
   EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["step_cpu_ms_p99"].get<double>(), 1.0 + 2.0 * 0.99);
   EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["step_cpu_ms_median"].get<double>(), 0.0);
+}
+
+TEST_F(RunEvaluatorTest, EstimatorBytesAreTheRunsMostAndTheLast) {
+  const nlohmann::json summary = Score({});
+  EXPECT_EQ(summary["robots"]["r1"]["estimator_bytes"].get<std::uint64_t>(), 3000U);
+  EXPECT_EQ(summary["robots"]["r1"]["estimator_bytes_final"].get<std::uint64_t>(), 2000U);
+  EXPECT_EQ(summary["robots"]["r2"]["estimator_bytes"].get<std::uint64_t>(), 0U);
+  EXPECT_EQ(summary["robots"]["r2"]["estimator_bytes_final"].get<std::uint64_t>(), 0U);
 }
 
 TEST_F(RunEvaluatorTest, AnAnnouncedFinalTrajectoryIsAwaitedAndScored) {

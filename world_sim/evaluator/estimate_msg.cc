@@ -35,6 +35,7 @@ RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
   e.frames_known = m.frames_known();
   e.rejected_samples = m.rejected_samples();
   e.step_cpu_ms = m.step_cpu_ms();
+  e.estimator_bytes = m.estimator_bytes();
   e.final_trajectory_chunks = m.final_trajectory_chunks();
   for (const auto& r : m.rendezvous()) e.rendezvous.push_back({r.peer_id(), r.step(), dds::FromMsg(r.t_self_peer())});
   return e;

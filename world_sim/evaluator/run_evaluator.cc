@@ -235,6 +235,8 @@ void RunEvaluator::ScoreSteps(bool finishing) {
 void RunEvaluator::ScoreStep(const std::string& id, RobotRun* robot, const RobotEstimate& est,
                              const common::Odometry* odo) {
   robot->step_cpu_ms.push_back(est.step_cpu_ms);
+  robot->estimator_bytes_final = est.estimator_bytes;
+  robot->estimator_bytes_max = std::max(robot->estimator_bytes_max, est.estimator_bytes);
   const auto t_it = truth_.find(est.step);
   if (t_it == truth_.end()) return;
   const auto* rt = FindEntity(t_it->second.robots, id);
@@ -324,6 +326,8 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["steps_scored"] = s.steps_scored;
   r["step_cpu_ms_median"] = robot.step_cpu_ms.empty() ? 0.0 : Median(robot.step_cpu_ms);
   r["step_cpu_ms_p99"] = robot.step_cpu_ms.empty() ? 0.0 : Percentile(robot.step_cpu_ms, 99.0);
+  r["estimator_bytes"] = robot.estimator_bytes_max;
+  r["estimator_bytes_final"] = robot.estimator_bytes_final;
   const DeliverySummary delivery = timing_.Summary(id);
   r["latency_us_median"] = delivery.latency_us_median;
   r["latency_us_p99"] = delivery.latency_us_p99;
