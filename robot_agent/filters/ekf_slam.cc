@@ -524,6 +524,13 @@ void EkfSlam::Io(common::Archive& ar) {
      creep_flags_);
 }
 
+std::size_t EkfSlam::EstimatorBytes() const {
+  std::size_t bytes = sizeof(*this) + sizeof(double) * static_cast<std::size_t>(x_.size() + p_.size()) +
+                      ElementBytes(slots_) + ElementBytes(moved_) + ElementBytes(restarts_);
+  for (const Slot& s : slots_) bytes += ElementBytes(s.probation_sightings) + ElementBytes(s.innovations);
+  return bytes;
+}
+
 FilterEstimate EkfSlam::Estimate() const {
   FilterEstimate e;
   e.step = step_;

@@ -74,6 +74,10 @@ class EkfSlam : public SlamFilter {
   void Process(const common::SensorStep& step) override;
   FilterEstimate Estimate() const override;
   void Io(common::Archive& ar) override;
+  // The state x (3 + 2 n doubles for n landmarks), its covariance P ((3 + 2 n)^2 doubles: the
+  // term that grows, quadratically, with the map), the landmarks' bookkeeping and their recent
+  // sightings (ekf_ela), the moves not yet taken.
+  std::size_t EstimatorBytes() const override;
   // Each incoming landmark is matched to the mapped ones (MatchLandmarks); a match is fused into
   // the joint state as a position observation z = m_in, H = [0 .. I .. 0], with the gain of the
   // rule (weighted: Kalman gain with R = C_in; covariance intersection: the Kalman gain with

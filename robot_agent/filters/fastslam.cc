@@ -190,6 +190,22 @@ std::vector<const void*> FastSlam<D>::LandmarkStorage(int i) const {
   return out;
 }
 
+// The object, each particle and its block pointers, each distinct landmark block once (shared
+// copies as the archive writes them), the weights and the step's labels.
+template <int D>
+std::size_t FastSlam<D>::EstimatorBytes() const {
+  std::vector<const Block*> blocks;
+  std::size_t bytes = sizeof(*this) + ElementBytes(particles_) + ElementBytes(log_weights_) +
+                      ElementBytes(creation_ids_) + ElementBytes(detection_labels_) + ElementBytes(detection_tracks_);
+  for (const Particle& p : particles_) {
+    bytes += ElementBytes(p.blocks);
+    for (const auto& b : p.blocks) blocks.push_back(b.get());
+  }
+  std::sort(blocks.begin(), blocks.end());
+  const auto distinct = static_cast<std::size_t>(std::unique(blocks.begin(), blocks.end()) - blocks.begin());
+  return bytes + distinct * sizeof(Block);
+}
+
 template <int D>
 void FastSlam<D>::MotionFromStep(const common::SensorStep& step, std::vector<Segment>* segments,
                                  Eigen::Vector3d* variance) {

@@ -96,6 +96,11 @@ class FastSlam : public SlamFilter {
   // The particles (poses, speeds, maps: each landmark block once, shared as it was), weights,
   // random stream, calibration, track counter and the last step's estimate and labels.
   void Io(common::Archive& ar) override;
+  // The particles (pose, speed, block pointers), each distinct landmark block once, the weights
+  // and the step's labels: about N (sizeof(Particle) + 8 + 16 B) + U sizeof(Block) for N
+  // particles of B blocks each and U distinct blocks (U <= N B; a map of L landmarks takes
+  // ceil(L / kLanes) blocks per particle): flat once the map stops growing.
+  std::size_t EstimatorBytes() const override;
   // Map merging (SlamFilter): per particle, incoming landmarks are matched to the particle's
   // (MatchLandmarks: identities or provenance, else Mahalanobis on position); a match is fused by rule
   // (FuseObservation on position, plus heading when both have one); the others are added to

@@ -18,6 +18,10 @@ void Io(common::Archive& ar, FilterEstimate& e) {
      e.detection_tracks);
 }
 
+std::size_t EstimateBytes(const FilterEstimate& e) {
+  return ElementBytes(e.landmarks) + ElementBytes(e.detection_tracks);
+}
+
 int NearestKnownKinematics(const std::vector<KnownKinematics>& candidates, double v_mps, double w_radps) {
   int nearest = -1;
   double best = std::numeric_limits<double>::infinity();

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -75,6 +76,13 @@ class SlamFilter {
   // stream, counters), not what its options fix. A filter made with the same options and seed
   // that reads what another wrote goes on exactly as the writer would have.
   virtual void Io(common::Archive& ar) = 0;
+  // The bytes of the state the estimator holds (what grows or not as it runs: particles and
+  // their maps, a joint state and its covariance, a graph's keyframes and factors). An estimate,
+  // not malloc accounting: the size of the object plus, over its main containers,
+  // sizeof(element) * size() (each copy-on-write block shared between particles counted once);
+  // caches, scratch buffers, spare capacity, allocator overheads and tree nodes' links are left
+  // out.
+  virtual std::size_t EstimatorBytes() const = 0;
 
   // Landmarks seen moving since the last call (filters that detect motion: ekf_ela); a filter
   // that tracks moving landmarks instead reports none.
@@ -116,6 +124,15 @@ class SlamFilter {
     return false;
   }
 };
+
+// sizeof(element) * size() of a container: its elements' bytes for EstimatorBytes (tree nodes'
+// links, spare capacity and what the elements themselves point to are not counted).
+template <typename Container>
+std::size_t ElementBytes(const Container& c) {
+  return sizeof(typename Container::value_type) * c.size();
+}
+// The bytes of a FilterEstimate's map and labels (its containers' elements).
+std::size_t EstimateBytes(const FilterEstimate& e);
 
 void Io(common::Archive& ar, MapLandmark& l);
 void Io(common::Archive& ar, MovedLandmark& m);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -14,6 +15,7 @@
 #include "common/angles.h"
 #include "common/gaussian.h"
 #include "robot_agent/filters/landmark_ekf.h"
+#include "robot_agent/filters/slam_filter.h"
 
 namespace mrslam::robot_agent::smoother {
 namespace {
@@ -519,6 +521,37 @@ void KeyframeGraph::Io(common::Archive& ar) {
   if (window_.empty()) throw common::ArchiveError("archive: a keyframe graph without keyframes");
   information_ = nullptr;  // a factorization of the last solve: that solve's own
   information_vars_.clear();
+}
+
+std::size_t KeyframeGraph::KeyframeBytes(int steps, int segments, int readings) {
+  return sizeof(Keyframe) + static_cast<std::size_t>(steps) * sizeof(std::vector<Motion>) +
+         static_cast<std::size_t>(segments) * sizeof(Motion) +
+         static_cast<std::size_t>(readings) * sizeof(StoredReading);
+}
+
+std::size_t KeyframeGraph::EstimatorBytes() const {
+  const auto motion_bytes = [](const std::vector<std::vector<Motion>>& steps) {
+    std::size_t bytes = filters::ElementBytes(steps);
+    for (const auto& segments : steps) bytes += filters::ElementBytes(segments);
+    return bytes;
+  };
+  const auto keyframe_bytes = [&](const Keyframe& kf) {
+    return sizeof(Keyframe) + motion_bytes(kf.steps) + filters::ElementBytes(kf.readings);
+  };
+  const auto prior_bytes = [](const Prior& p) {
+    std::size_t bytes = filters::ElementBytes(p.vars) + filters::ElementBytes(p.x0) +
+                        sizeof(double) * static_cast<std::size_t>(p.h.size() + p.g.size());
+    for (const auto& x0 : p.x0) bytes += sizeof(double) * static_cast<std::size_t>(x0.size());
+    return bytes;
+  };
+  std::size_t bytes = motion_bytes(pending_) + filters::ElementBytes(landmarks_) +
+                      filters::ElementBytes(static_tracks_) + filters::ElementBytes(mover_models_) +
+                      filters::ElementBytes(moving_tracks_) + filters::ElementBytes(movers_) +
+                      filters::ElementBytes(chain_starts_) + prior_bytes(prior_) + prior_bytes(calibration_prior_) +
+                      filters::ElementBytes(landmark_cov_) + filters::ElementBytes(mover_cov_);
+  for (const Keyframe& kf : window_) bytes += keyframe_bytes(kf);
+  for (const Keyframe& kf : history_) bytes += keyframe_bytes(kf);
+  return bytes;
 }
 
 void KeyframeGraph::Solve() {

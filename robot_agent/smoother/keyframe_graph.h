@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -146,6 +147,20 @@ class KeyframeGraph {
   // The readings of the newest keyframe and whether each is within the gate at the solution.
   std::vector<std::pair<Reading, bool>> NewestReadings() const;
   int WindowSize() const { return static_cast<int>(window_.size()); }
+  // Keyframes marginalized so far (held in the fixed history for SmoothAll).
+  int HistorySize() const { return static_cast<int>(history_.size()); }
+
+  // The bytes of what the graph holds beyond the object itself (SlamFilter::EstimatorBytes: the
+  // elements of its containers): the window's and the history's keyframes (KeyframeBytes each),
+  // the pending motion, the landmarks, the tracks, the movers' states and models, the priors
+  // (variables, linearization points, H_p, g_p) and the covariances last computed. Grows by one
+  // keyframe's bytes per marginalized keyframe; the rest follows the window, the map and the
+  // movers, bounded while they are.
+  std::size_t EstimatorBytes() const;
+  // What one keyframe holds, its pose, odometry (per step a vector of segments) and readings:
+  // sizeof(Keyframe) + steps sizeof(std::vector<Motion>) + segments sizeof(Motion) + readings
+  // sizeof(StoredReading), `segments` counted over all its steps (x86-64: 160 + 24 + 24 + 32).
+  static std::size_t KeyframeBytes(int steps, int segments, int readings);
 
  private:
   struct StoredReading {

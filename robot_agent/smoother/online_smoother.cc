@@ -228,6 +228,10 @@ void OnlineSmoother::Io(common::Archive& ar) {
   ar(calibration_, graph_, front_, step_, since_keyframe_, lost_keyframes_, lost_since_step_, recoveries_);
 }
 
+std::size_t OnlineSmoother::EstimatorBytes() const {
+  return sizeof(*this) + front_end_->EstimatorBytes() + filters::EstimateBytes(front_) + graph_.EstimatorBytes();
+}
+
 FilterEstimate OnlineSmoother::Estimate() const {
   FilterEstimate out;
   out.step = front_.step;

@@ -42,6 +42,10 @@ class OnlineSmoother : public filters::SlamFilter {
   filters::FilterEstimate Estimate() const override;
   // The front end's state, the calibration, the graph and the bookkeeping of lost keyframes.
   void Io(common::Archive& ar) override;
+  // The object, the front end's state (its FastSLAM particles and maps) and its last estimate,
+  // and the graph's (KeyframeGraph::EstimatorBytes): grows by one keyframe's bytes for each
+  // keyframe marginalized into the fixed history.
+  std::size_t EstimatorBytes() const override;
   int MergeLandmarks(const std::vector<filters::MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                      double gate_probability, double too_close_m) override;
 

@@ -172,6 +172,7 @@ void ExpectSameEstimate(const mrslam_msg_Estimate& c, const msg::Estimate& f) {
   }
   EXPECT_EQ(c.rejected_samples, f.rejected_samples()) << what;
   EXPECT_EQ(c.step_cpu_ms, f.step_cpu_ms()) << what;
+  EXPECT_EQ(c.estimator_bytes, f.estimator_bytes()) << what;
   EXPECT_EQ(c.final_trajectory_chunks, f.final_trajectory_chunks()) << what;
 }
 

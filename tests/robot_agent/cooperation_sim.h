@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -30,6 +31,7 @@ class FakeFilter : public filters::SlamFilter {
   void Process(const common::SensorStep&) override {}
   filters::FilterEstimate Estimate() const override { return estimate; }
   void Io(common::Archive& ar) override { ar(estimate, merges, robot_observations, notices); }
+  std::size_t EstimatorBytes() const override { return sizeof(*this) + filters::EstimateBytes(estimate); }
   int MergeLandmarks(const std::vector<filters::MapLandmark>& in, robot_agent::MapFusionRule rule,
                      double gate_probability, double /*too_close_m*/) override {
     ++merges;

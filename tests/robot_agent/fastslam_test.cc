@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <set>
 
@@ -373,6 +374,32 @@ TEST(FastSlam, ResamplingSharesLandmarkStorage) {
   for (int p = 0; p < filter.NumParticles(); ++p) {
     EXPECT_NEAR(filter.ParticleWeight(p), 1.0 / filter.NumParticles(), 1e-12);
   }
+}
+
+// What FastSLAM holds grows with its map, not with time: in a static world whose map is complete
+// by step 200, EstimatorBytes at step 2000 is within 10% of that at step 200. It counts each
+// distinct landmark block once (shared copies as the archive writes them).
+TEST(FastSlam, EstimatorBytesStayFlatOnceTheMapIsComplete) {
+  const common::ScenarioOptions o = StaticScenario(100);
+  TinyWorld world(o, 5);
+  FastSlam<2> filter(common::AgentOptionsFor(o, "r1"), 5);
+  std::size_t at_200 = 0;
+  for (int k = 1; k <= 2000; ++k) {
+    filter.Process(world.Step());
+    if (k == 200) {
+      ASSERT_EQ(filter.Estimate().landmarks.size(), 8u);
+      at_200 = filter.EstimatorBytes();
+    }
+  }
+  EXPECT_EQ(filter.Estimate().landmarks.size(), 8u);
+  const std::size_t at_2000 = filter.EstimatorBytes();
+  EXPECT_GT(static_cast<double>(at_2000), 0.9 * static_cast<double>(at_200));
+  EXPECT_LT(static_cast<double>(at_2000), 1.1 * static_cast<double>(at_200));
+  std::set<const void*> distinct;
+  for (int p = 0; p < filter.NumParticles(); ++p) {
+    for (const void* b : filter.LandmarkStorage(p)) distinct.insert(b);
+  }
+  EXPECT_GE(at_2000, sizeof(FastSlam<2>) + distinct.size() * sizeof(LandmarkBlock<2>));
 }
 
 TEST(SlamFilter, CreatesEveryKnownFilterAndNothingElse) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
+#include "tests/robot_agent/tiny_world.h"
 #include "world_sim/source/step_source_factory.h"
 
 namespace mrslam::robot_agent::smoother {
@@ -74,6 +76,38 @@ TEST(OnlineSmoother, FindsItsPoseAgainAfterASlip) {
   EXPECT_GT(*std::max_element(e.heading_rad.begin() + 82, e.heading_rad.begin() + 87), common::RadFromDeg(20.0));
   EXPECT_LT(e.position_m.back(), 0.3);
   EXPECT_LT(e.heading_rad.back(), common::RadFromDeg(5.0));
+}
+
+// What the smoother holds grows with the keyframes it marginalizes, each kept whole in the fixed
+// history for the final trajectory, and with little else once its map is complete. Eight static
+// landmarks around a circle (every step a keyframe: one step of one odometry segment and the
+// readings of at most the eight landmarks): from step 200 to step 2000, EstimatorBytes grows by
+// between KeyframeBytes(1, 1, 0) and KeyframeBytes(1, 1, 8) per keyframe marginalized.
+TEST(OnlineSmoother, EstimatorBytesGrowByTheKeyframesMarginalized) {
+  common::ScenarioOptions o = testing::OneRobotScenario(1.0, 0.2, 100);
+  o.robots[0].initial_pose = {0.0, -5.0, 0.0};
+  for (int i = 0; i < 8; ++i) {
+    const double a = i * common::kPi / 4.0;
+    testing::AddLandmark(&o, i + 1, {(i % 2 ? 3.0 : 7.0) * std::cos(a), (i % 2 ? 3.0 : 7.0) * std::sin(a), 0.0});
+  }
+  o.filter.landmark_kinematics = LandmarkKinematics::kStatic;
+  testing::TinyWorld world(o, 3);
+  OnlineSmoother smoother(common::AgentOptionsFor(o, "r1"), 3);
+  std::size_t bytes_200 = 0;
+  int history_200 = 0;
+  for (int k = 1; k <= 2000; ++k) {
+    smoother.Process(world.Step());
+    if (k == 200) {
+      bytes_200 = smoother.EstimatorBytes();
+      history_200 = smoother.Graph().HistorySize();
+    }
+  }
+  const int marginalized = smoother.Graph().HistorySize() - history_200;
+  EXPECT_EQ(marginalized, 1800);
+  const double per_keyframe =
+      (static_cast<double>(smoother.EstimatorBytes()) - static_cast<double>(bytes_200)) / marginalized;
+  EXPECT_GE(per_keyframe, static_cast<double>(KeyframeGraph::KeyframeBytes(1, 1, 0)));
+  EXPECT_LE(per_keyframe, static_cast<double>(KeyframeGraph::KeyframeBytes(1, 1, 8)));
 }
 
 }  // namespace

@@ -54,6 +54,7 @@ class RunEvaluatorTest : public ::testing::Test {
       r1.step_cpu_ms = 1.0 + 2.0 * step;  // 1 and 3 ms
       r1.peer_bytes_sent = 300U * step;   // the agent's running counts
       r1.peer_bytes_received = 100U * step;
+      r1.estimator_bytes = 3000 - 1000 * step;  // 3000 and 2000 bytes: the most came first
       evaluator.AddEstimate("r1", r1);
       evaluator.AddEstimate("r2", r2);
       if (step > 0) {  // standing still
@@ -102,6 +103,14 @@ TEST_F(RunEvaluatorTest, PeerBytesArePerSimulatedSecondOfTheAgentsSteps) {
   EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["peer_bytes_sent_per_s"].get<double>(), 300.0 / seconds);
   EXPECT_DOUBLE_EQ(summary["robots"]["r1"]["peer_bytes_received_per_s"].get<double>(), 100.0 / seconds);
   EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["peer_bytes_sent_per_s"].get<double>(), 0.0);
+}
+
+TEST_F(RunEvaluatorTest, EstimatorBytesAreTheRunsMostAndTheLast) {
+  const nlohmann::json summary = Score({});
+  EXPECT_EQ(summary["robots"]["r1"]["estimator_bytes"].get<std::uint64_t>(), 3000U);
+  EXPECT_EQ(summary["robots"]["r1"]["estimator_bytes_final"].get<std::uint64_t>(), 2000U);
+  EXPECT_EQ(summary["robots"]["r2"]["estimator_bytes"].get<std::uint64_t>(), 0U);
+  EXPECT_EQ(summary["robots"]["r2"]["estimator_bytes_final"].get<std::uint64_t>(), 0U);
 }
 
 TEST_F(RunEvaluatorTest, AnAnnouncedFinalTrajectoryIsAwaitedAndScored) {

@@ -44,7 +44,8 @@ struct RobotEstimate {
   std::vector<RendezvousRecord> rendezvous;
   // Samples and peer messages the agent has rejected so far (malformed, stale, not for it).
   std::uint32_t rejected_samples = 0;
-  double step_cpu_ms = 0.0;  // the agent's CPU time for this step's estimation
+  double step_cpu_ms = 0.0;           // the agent's CPU time for this step's estimation
+  std::uint64_t estimator_bytes = 0;  // what the agent's estimator holds after the step
   // Serialized bytes of the peer messages the agent has sent and taken in so far.
   std::uint64_t peer_bytes_sent = 0, peer_bytes_received = 0;
   // When the agent wrote the message and the evaluator received it (ns since the Unix epoch;

@@ -235,6 +235,8 @@ void RunEvaluator::ScoreSteps(bool finishing) {
 void RunEvaluator::ScoreStep(const std::string& id, RobotRun* robot, const RobotEstimate& est,
                              const common::Odometry* odo) {
   robot->step_cpu_ms.push_back(est.step_cpu_ms);
+  robot->estimator_bytes_final = est.estimator_bytes;
+  robot->estimator_bytes_max = std::max(robot->estimator_bytes_max, est.estimator_bytes);
   const auto t_it = truth_.find(est.step);
   if (t_it == truth_.end()) return;
   const auto* rt = FindEntity(t_it->second.robots, id);
@@ -329,6 +331,8 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   const auto per_s = [&](std::uint64_t bytes) { return seconds > 0.0 ? static_cast<double>(bytes) / seconds : 0.0; };
   r["peer_bytes_sent_per_s"] = robot.last ? per_s(robot.last->peer_bytes_sent) : 0.0;
   r["peer_bytes_received_per_s"] = robot.last ? per_s(robot.last->peer_bytes_received) : 0.0;
+  r["estimator_bytes"] = robot.estimator_bytes_max;
+  r["estimator_bytes_final"] = robot.estimator_bytes_final;
   const DeliverySummary delivery = timing_.Summary(id);
   r["latency_us_median"] = delivery.latency_us_median;
   r["latency_us_p99"] = delivery.latency_us_p99;

@@ -82,6 +82,9 @@ class RunEvaluator {
     std::uint32_t final_chunks_announced = 0;
     std::optional<RobotEstimate> last;  // the newest scored
     std::vector<double> step_cpu_ms;
+    // What the agent's estimator held (RobotEstimate::estimator_bytes): at the newest step scored,
+    // and the most over the run.
+    std::uint64_t estimator_bytes_final = 0, estimator_bytes_max = 0;
     std::set<int> reached;                             // true landmarks ever within its reach
     std::map<std::uint32_t, common::Pose2> truth_own;  // its true pose in G_i by step
     double online_sum_sq = 0.0;                        // its online path as a final trajectory
