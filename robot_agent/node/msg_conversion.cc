@@ -24,6 +24,14 @@ msg::Stamp HeaderStamp(const cooperation::PeerHeader& h) {
 cooperation::PeerHeader HeaderFrom(const msg::Stamp& s, const std::string& recipient, std::uint32_t sequence) {
   return {s.robot_id(), recipient, s.step(), s.time_s(), sequence};
 }
+// The header every peer message carries: the sender's stamp, the recipient, the sequence number.
+template <typename M>
+void PutHeader(const cooperation::PeerHeader& h, M* m) {
+  m->stamp(HeaderStamp(h));
+  m->recipient_id(h.recipient);
+  m->sequence_number(h.sequence);
+}
+
 }  // namespace
 
 msg::LandmarkEstimate ToMsg(const filters::MapLandmark& l) {
@@ -104,9 +112,7 @@ filters::FilterEstimate FromMsg(const msg::Estimate& m) {
 
 msg::RelativeMeasurement ToMsg(const cooperation::RelativeMeasurement& r) {
   msg::RelativeMeasurement m;
-  m.stamp(HeaderStamp(r.header));
-  m.recipient_id(r.header.recipient);
-  m.sequence_number(r.header.sequence);
+  PutHeader(r.header, &m);
   m.has_range(r.has_range);
   m.range_m(r.range_m);
   m.bearing_rad(r.bearing_rad);
@@ -127,9 +133,7 @@ cooperation::RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
 
 msg::FactorBatch ToMsg(const cooperation::FactorBatch& b) {
   msg::FactorBatch m;
-  m.stamp(HeaderStamp(b.header));
-  m.recipient_id(b.header.recipient);
-  m.sequence_number(b.header.sequence);
+  PutHeader(b.header, &m);
   m.opened_by_step(b.opened_by_step);
   for (const auto& h : b.holdings) {
     msg::FactorHolding mh;
@@ -166,9 +170,7 @@ cooperation::FactorBatch FromMsg(const msg::FactorBatch& m) {
 
 msg::MapSnapshot ToMsg(const cooperation::MapSnapshot& s) {
   msg::MapSnapshot m;
-  m.stamp(HeaderStamp(s.header));
-  m.recipient_id(s.header.recipient);
-  m.sequence_number(s.header.sequence);
+  PutHeader(s.header, &m);
   for (const auto& l : s.landmarks) m.landmarks().push_back(ToMsg(l));
   for (const auto& t : s.known_transforms) m.known_transforms().push_back(ToMsg(t));
   m.first_pose(dds::ToMsg(s.first_pose));
@@ -187,9 +189,7 @@ cooperation::MapSnapshot FromMsg(const msg::MapSnapshot& m) {
 
 msg::LandmarkMovedNotice ToMsg(const cooperation::LandmarkMovedNotice& n) {
   msg::LandmarkMovedNotice m;
-  m.stamp(HeaderStamp(n.header));
-  m.recipient_id(n.header.recipient);
-  m.sequence_number(n.header.sequence);
+  PutHeader(n.header, &m);
   m.track_id(n.track_id);
   m.landmark_id(n.landmark_id);
   m.position_in_sender(dds::ToMsg(common::Pose2{n.position_in_sender.x(), n.position_in_sender.y(), 0.0}));

@@ -50,10 +50,10 @@ class RunEvaluatorTest : public ::testing::Test {
       r1.landmarks = {{Eigen::Vector2d(1.0, 0.0), 1}};
       r2.landmarks = {{Eigen::Vector2d(1.0, 0.0), 2}};  // in r2's own frame
       r1.frames_known = r1_frames_known;
-      r1.rejected_samples = 2 * step;     // the agent's running count
-      r1.step_cpu_ms = 1.0 + 2.0 * step;  // 1 and 3 ms
-      r1.peer_bytes_sent = 300U * step;   // the agent's running counts
-      r1.peer_bytes_received = 100U * step;
+      r1.rejected_samples = 2 * step;                  // the agent's running count
+      r1.step_cpu_ms = 1.0 + 2.0 * step;               // 1 and 3 ms
+      r1.peer_bytes_sent = std::uint64_t{300} * step;  // the agent's running counts
+      r1.peer_bytes_received = std::uint64_t{100} * step;
       r1.estimator_bytes = 3000 - 1000 * step;  // 3000 and 2000 bytes: the most came first
       evaluator.AddEstimate("r1", r1);
       evaluator.AddEstimate("r2", r2);
