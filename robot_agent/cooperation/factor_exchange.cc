@@ -66,6 +66,18 @@ std::uint32_t FactorExchange::Held(const std::string& origin) const {
   return it == logs_.end() ? 0 : it->second.Held();
 }
 
+std::size_t FactorExchange::HeldBytes() const {
+  std::size_t bytes = 0;
+  for (const auto& [origin, log] : logs_) {
+    bytes += filters::ElementBytes(log.steps);
+    for (const auto& s : log.steps) {
+      bytes += filters::ElementBytes(s.lidar.landmarks) + filters::ElementBytes(s.lidar.robots) +
+               filters::ElementBytes(s.odometry.segments);
+    }
+  }
+  return bytes;
+}
+
 void FactorExchange::RecordOwn(const common::SensorStep& labelled) {
   FactorLog& own = logs_[self_];
   const std::uint32_t k = labelled.lidar.stamp.step;

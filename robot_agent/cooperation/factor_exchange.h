@@ -86,6 +86,9 @@ class FactorExchange {
   // Every origin's log held, the own included (by robot id).
   const std::map<std::string, FactorLog>& logs() const { return logs_; }
   std::uint32_t Held(const std::string& origin) const;
+  // The bytes of the steps held, every origin's (sizeof(element) * size() over their containers,
+  // as SlamFilter::EstimatorBytes counts).
+  std::size_t HeldBytes() const;
   int gaps() const { return gaps_; }
   // Steps taken in from peers (each once), steps that came again (already held), steps sent.
   std::uint64_t steps_received() const { return steps_received_; }

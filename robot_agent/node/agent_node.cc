@@ -528,7 +528,7 @@ struct AgentNode::Impl {
     m.step_cpu_ms(step_cpu_ms);
     m.peer_bytes_sent(Total(bytes_sent_to));
     m.peer_bytes_received(Total(bytes_received_from));
-    m.estimator_bytes(filter->EstimatorBytes());
+    m.estimator_bytes(filter->EstimatorBytes() + cooperation.exchange().HeldBytes());
     step_times[k] = time_s;
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <string>
@@ -294,6 +295,16 @@ TEST_F(RejectedBatch, TheRecipientsOwnStepsOrRelayedOnesWhenRelayingIsOff) {
   EXPECT_EQ(a.Held("c"), 1U);
   FactorExchange no_relay(Options("a", /*relay=*/false));
   EXPECT_FALSE(no_relay.Receive(relayed));
+}
+
+TEST(FactorExchange, HeldBytesGrowByEachStepsContainers) {
+  FactorExchange a(Options("a"));
+  EXPECT_EQ(a.HeldBytes(), 0U);
+  for (std::uint32_t k = 1; k <= 10; ++k) a.RecordOwn(Step("a", k));  // one segment, one reading each
+  const std::size_t per_step =
+      sizeof(common::SensorStep) + sizeof(common::LandmarkDetection) + sizeof(common::OdometrySegment);
+  EXPECT_EQ(a.HeldBytes(), 10 * per_step);
+  std::cout << "a held step of one segment and one reading: " << per_step << " bytes\n";
 }
 
 TEST(FactorExchange, ComesBackFromAnArchiveAsItWas) {
