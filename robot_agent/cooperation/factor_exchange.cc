@@ -28,9 +28,14 @@ std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step,
   kept.lidar.robots = step.lidar.robots;
   kept.odometry = step.odometry;
   for (std::size_t i = 0; i < step.lidar.landmarks.size(); ++i) {
-    if (estimate.detection_tracks[i] == 0) continue;
     common::LandmarkDetection d = step.lidar.landmarks[i];
-    d.landmark_id = static_cast<int>(estimate.detection_tracks[i]);
+    if (d.landmark_id >= 0) {
+      d.landmark_id += 1;  // the identity the sensor reports, the same for every robot
+    } else if (estimate.detection_tracks[i] != 0) {
+      d.landmark_id = static_cast<int>(estimate.detection_tracks[i]);
+    } else {
+      continue;
+    }
     kept.lidar.landmarks.push_back(d);
   }
   return kept;

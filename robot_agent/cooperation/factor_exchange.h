@@ -34,8 +34,10 @@ struct FactorLog {
 };
 
 // The step as a shared measurement: its odometry, its robot detections and its landmark
-// detections labelled by estimate.detection_tracks (the unlabelled left out), the stamp kept;
-// nothing when the filter does not label its detections.
+// detections labelled, the stamp kept; nothing when the filter does not label its detections.
+// A detection's label is its identity + 1 when the sensor reports identities
+// (sensors.lidar.report_identity: every robot's labels then name the same landmarks), else
+// its track in estimate.detection_tracks (the robot's own; the unlabelled left out).
 std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, const filters::FilterEstimate& estimate);
 
 // Whether s is a well-formed shared step `step`: that stamp, finite values, a positive range,

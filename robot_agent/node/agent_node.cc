@@ -17,6 +17,7 @@
 #include "mrslamPubSubTypes.h"
 #include "robot_agent/cooperation/cooperation.h"
 #include "robot_agent/cooperation/held_factors.h"
+#include "robot_agent/cooperation/joint_estimate.h"
 #include "robot_agent/cooperation/sample_intake.h"
 #include "robot_agent/cooperation/sample_validation.h"
 #include "robot_agent/node/msg_conversion.h"
@@ -359,7 +360,7 @@ struct AgentNode::Impl {
   // At the end of the run: publishes the estimator's final trajectory, if it has one; returns the
   // number of chunks.
   std::uint32_t PublishFinalTrajectory(std::uint32_t k, double time_s) {
-    const auto path = filter->FinalTrajectory();
+    const auto path = FinalPath(k);
     if (path.empty()) return 0;
     const auto chunks = FinalTrajectoryChunks(path, step_times, {agent.robot_id, k, time_s});
     for (const auto& chunk : chunks) {
@@ -367,6 +368,23 @@ struct AgentNode::Impl {
     }
     spdlog::info("final trajectory: {} poses in {} chunk(s)", path.size(), chunks.size());
     return static_cast<std::uint32_t>(chunks.size());
+  }
+
+  // The final trajectory: with the raw measurements shared and the own ones held to step k, the
+  // own path of the joint estimate over everything held; else the estimator's.
+  std::vector<std::pair<int, common::Pose2>> FinalPath(std::uint32_t k) const {
+    const auto& x = cooperation.exchange();
+    if (!agent.cooperation.share_factors || x.Held(agent.robot_id) < k) return filter->FinalTrajectory();
+    const auto joint = cooperation::SolveJoint(agent, agent.robot_id, x.logs());
+    for (const auto& f : joint.frames) {
+      const Eigen::Vector3d sd = f.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+      spdlog::info("joint estimate: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad), sd ({:.3f} m, {:.3f} m, {:.4f} rad)",
+                   agent.robot_id, f.robot, f.t_self_robot.x, f.t_self_robot.y, f.t_self_robot.heading, sd(0), sd(1),
+                   sd(2));
+    }
+    spdlog::info("joint estimate over {} robots' raw measurements ({} not linked): {} readings, {} left out",
+                 joint.frames.size() + 1, joint.not_placed.size(), joint.readings, joint.outliers);
+    return joint.path;
   }
 
   // At the end of the run: lets the evaluator and the simulator receive the final estimate and

@@ -16,6 +16,8 @@
 #include "common/gaussian.h"
 #include "robot_agent/filters/landmark_ekf.h"
 #include "robot_agent/filters/slam_filter.h"
+#include "robot_agent/smoother/graph_factors.h"
+#include "robot_agent/smoother/levenberg_marquardt.h"
 
 namespace mrslam::robot_agent::smoother {
 namespace {
@@ -24,21 +26,6 @@ using common::Pose2;
 using common::WrapAngle;
 
 double Sd(double var) { return std::sqrt(std::max(var, 1e-12)); }
-
-// Between(a, b) as a vector, and its Jacobians with respect to a and b.
-struct BetweenJacobians {
-  Eigen::Vector3d value;
-  Eigen::Matrix3d ja, jb;
-};
-BetweenJacobians BetweenWithJacobians(const Pose2& a, const Pose2& b) {
-  const double c = std::cos(a.heading), s = std::sin(a.heading);
-  const double dx = b.x - a.x, dy = b.y - a.y;
-  BetweenJacobians out;
-  out.value << c * dx + s * dy, -s * dx + c * dy, WrapAngle(b.heading - a.heading);
-  out.ja << -c, -s, -s * dx + c * dy, s, -c, -c * dx - s * dy, 0.0, 0.0, -1.0;
-  out.jb << c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0;
-  return out;
-}
 
 }  // namespace
 
@@ -65,54 +52,6 @@ KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
   calibration_prior_ = prior_;
 }
 
-Pose2 KeyframeGraph::Increment(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction) const {
-  Pose2 out;
-  for (const auto& step : steps) {
-    for (const auto& m : step) {
-      out = common::UnicycleStep(out, correction(0) * m.v_mps, correction(1) * m.w_radps + correction(2), m.dt_s);
-    }
-  }
-  return out;
-}
-
-// d Increment / d correction by central differences (heading differences wrapped).
-Eigen::Matrix3d KeyframeGraph::IncrementJacobian(const std::vector<std::vector<Motion>>& steps) const {
-  constexpr double kH = 1e-6;
-  Eigen::Matrix3d j;
-  for (int c = 0; c < 3; ++c) {
-    Eigen::Vector3d d = Eigen::Vector3d::Zero();
-    d(c) = kH;
-    const Pose2 plus = Increment(steps, correction_ + d), minus = Increment(steps, correction_ - d);
-    j.col(c) = Eigen::Vector3d(plus.x - minus.x, plus.y - minus.y, WrapAngle(plus.heading - minus.heading)) / (2 * kH);
-  }
-  return j;
-}
-
-namespace {
-
-// The covariance of a composition of per-step increments, each with additive noise of
-// variances var in the frame it starts from: Sigma_i = J Sigma_{i-1} J^T + diag(var).
-Eigen::Matrix3d Accumulate(const std::vector<Pose2>& increments, const Eigen::Vector3d& var) {
-  Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
-  Pose2 delta;
-  for (const Pose2& d : increments) {
-    const Eigen::Matrix3d j = common::ComposeJacobianLeft(delta, d);
-    sigma = j * sigma * j.transpose();
-    sigma.diagonal() += var.unaryExpr([](double v) { return std::max(v, 1e-12); });
-    delta = common::Compose(delta, d);
-  }
-  return sigma;
-}
-
-}  // namespace
-
-Eigen::Matrix3d KeyframeGraph::AccumulatedCovariance(const std::vector<std::vector<Motion>>& steps) const {
-  std::vector<Pose2> increments;
-  increments.reserve(steps.size());
-  for (const auto& step : steps) increments.push_back(Increment({step}, correction_));
-  return Accumulate(increments, robot_var_);
-}
-
 Pose2 KeyframeGraph::MoverIncrement(const MoverModel& model, int steps) const {
   Pose2 out;
   for (int i = 0; i < steps; ++i) out = common::UnicycleStep(out, model.v_mps, model.w_radps, dt_s_);
@@ -121,8 +60,7 @@ Pose2 KeyframeGraph::MoverIncrement(const MoverModel& model, int steps) const {
 
 Eigen::Matrix3d KeyframeGraph::MoverWhitening(const MoverModel& model, int steps) const {
   const std::vector<Pose2> increments(steps, MoverIncrement(model, 1));
-  const Eigen::Matrix3d sigma = Accumulate(increments, landmark_var_);
-  return Eigen::Matrix3d(sigma.llt().matrixL()).inverse();
+  return Whitening(AccumulateCovariance(increments, landmark_var_));
 }
 
 void KeyframeGraph::AddMotion(const std::vector<Motion>& segments) { pending_.push_back(segments); }
@@ -130,12 +68,11 @@ void KeyframeGraph::AddMotion(const std::vector<Motion>& segments) { pending_.pu
 void KeyframeGraph::AddKeyframe(int step, const std::vector<Reading>& readings) {
   Keyframe kf;
   kf.step = step;
-  kf.pose = common::Compose(window_.back().pose, Increment(pending_, correction_));
+  kf.pose = common::Compose(window_.back().pose, OdometryIncrement(pending_, correction_));
   kf.has_odometry = true;
   kf.steps = std::move(pending_);
   pending_.clear();
-  const Eigen::Matrix3d sigma = AccumulatedCovariance(kf.steps);
-  kf.odometry_whitening = Eigen::Matrix3d(sigma.llt().matrixL()).inverse();
+  kf.odometry_whitening = Whitening(OdometryCovariance(kf.steps, correction_, robot_var_));
   for (const auto& z : readings) {
     if (std::isfinite(z.range_m) && std::isfinite(z.bearing_rad)) kf.readings.push_back({z, true});
   }
@@ -337,7 +274,7 @@ Eigen::Vector2d KeyframeGraph::WhitenedResidual(const Pose2& x, const Eigen::Vec
 void KeyframeGraph::AddOdometryRows(const Layout& layout, const Keyframe& previous, const Keyframe& kf,
                                     Rows* rows) const {
   const BetweenJacobians b = BetweenWithJacobians(previous.pose, kf.pose);
-  const Pose2 delta = Increment(kf.steps, correction_);
+  const Pose2 delta = OdometryIncrement(kf.steps, correction_);
   Eigen::Vector3d e = b.value - delta.Vector();
   e(2) = WrapAngle(e(2));
   const Eigen::Matrix3d& w = kf.odometry_whitening;
@@ -345,7 +282,8 @@ void KeyframeGraph::AddOdometryRows(const Layout& layout, const Keyframe& previo
   rows->cost += r.squaredNorm();
   if (!rows->jacobians) return;
   const int c_col = layout.Col({Var::kCorrection, 0});
-  const Eigen::Matrix3d jc = c_col < 0 ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(-w * IncrementJacobian(kf.steps));
+  const Eigen::Matrix3d jc =
+      c_col < 0 ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(-w * OdometryIncrementJacobian(kf.steps, correction_));
   rows->Add(r, {{previous.fixed ? -1 : layout.Col({Var::kPose, previous.step}), w * b.ja},
                 {layout.Col({Var::kPose, kf.step}), w * b.jb},
                 {c_col, jc}});
@@ -363,8 +301,9 @@ void KeyframeGraph::AddReadingRows(const Layout& layout, const Keyframe& kf, Row
     const Eigen::Vector2d p = mover ? movers_.at(target.key).Translation() : landmarks_.at(stored.z.track);
     Eigen::Vector2d r = WhitenedResidual(kf.pose, p, stored.z);
     const double s = r.norm();
-    const double scale = s > huber_k_ ? std::sqrt(huber_k_ / s) : 1.0;
-    rows->cost += s > huber_k_ ? 2.0 * huber_k_ * s - huber_k_ * huber_k_ : s * s;
+    const Huber huber = HuberLoss(s, huber_k_);
+    const double scale = huber.scale;
+    rows->cost += huber.cost;
     r *= scale;
     const Eigen::Matrix2d w = scale * z_w_.asDiagonal();
     Rows::Block jp = Rows::Block::Zero(2, Dim(target));
@@ -450,45 +389,26 @@ double KeyframeGraph::SolveOnce() {
   StartMovers();
   const std::vector<Var> vars = Variables(false);
   const Layout layout = MakeLayout(vars);
-  auto apply = [&](const Eigen::VectorXd& delta) {
+  std::vector<Eigen::VectorXd> saved;  // the values before a step, in the order of vars
+  LeastSquares problem;
+  problem.cols = layout.cols;
+  problem.equations = [&](bool jacobians) { return Equations(layout, false, jacobians); };
+  problem.step = [&](const Eigen::VectorXd& delta) {
     for (const Var& v : vars) SetValue(v, Value(v) + delta.segment(layout.Col(v), Dim(v)));
   };
-  double lambda = 1e-6, cost = 0.0, factorized_lambda = 0.0;
-  auto solver = std::make_shared<Factorization>();
-  for (int iteration = 0; iteration < max_iterations_; ++iteration) {
-    const Rows rows = Equations(layout, false, true);
-    Eigen::SparseMatrix<double> h = rows.Matrix();
-    const Eigen::VectorXd& g = rows.g;
-    cost = rows.cost;
-    const Eigen::VectorXd diag = h.diagonal();
-    // (The 1e-9 ridge keeps a variable nothing informs, such as a mover's state whose only
-    // reading left the gate, from making the matrix singular: its variance becomes 1e9.)
-    for (int c = 0; c < layout.cols; ++c) h.coeffRef(c, c) += lambda * std::max(diag(c), 1e-9) + kRidge;
-    if (iteration == 0) solver->analyzePattern(h);
-    solver->factorize(h);
-    factorized_lambda = lambda;
-    const Eigen::VectorXd delta = solver->solve(-g);
-    if (solver->info() != Eigen::Success || !delta.allFinite()) break;
-    std::vector<Eigen::VectorXd> saved;  // the values before the step, in the order of vars
-    saved.reserve(vars.size());
+  problem.save = [&] {
+    saved.clear();
     for (const Var& v : vars) saved.push_back(Value(v));
-    apply(delta);
-    const double after = Equations(layout, false, false).cost;
-    if (after > cost) {
-      for (std::size_t i = 0; i < vars.size(); ++i) SetValue(vars[i], saved[i]);
-      lambda *= 10.0;
-      if (lambda > 1e6) break;
-      continue;
-    }
-    const double decrease = cost - after;
-    cost = after;
-    lambda = std::max(lambda / 10.0, 1e-9);
-    if (delta.cwiseAbs().maxCoeff() < 1e-7 || decrease < 1e-6 * (1.0 + cost)) break;
-  }
-  const bool usable = solver->info() == Eigen::Success && factorized_lambda <= kUsableDamping;
+  };
+  problem.restore = [&] {
+    for (std::size_t i = 0; i < vars.size(); ++i) SetValue(vars[i], saved[i]);
+  };
+  auto solver = std::make_shared<Factorization>();
+  const LmResult result = LevenbergMarquardt(problem, max_iterations_, kRidge, solver.get());
+  const bool usable = result.factorized && result.factorized_lambda <= kUsableDamping;
   information_ = usable ? std::move(solver) : nullptr;
   information_vars_ = vars;
-  return cost;
+  return result.cost;
 }
 
 bool KeyframeGraph::UpdateInliers() {
@@ -628,8 +548,8 @@ std::vector<KeyframeGraph::Var> KeyframeGraph::CovarianceTargets(const std::vect
 }
 
 // The factorized information matrix at the solution: the last solve's, or afresh.
-std::shared_ptr<const KeyframeGraph::Factorization> KeyframeGraph::Information(const std::vector<Var>& vars,
-                                                                               const Layout& layout) const {
+std::shared_ptr<const Factorization> KeyframeGraph::Information(const std::vector<Var>& vars,
+                                                                const Layout& layout) const {
   if (information_ != nullptr && information_vars_ == vars) return information_;
   Eigen::SparseMatrix<double> identity(layout.cols, layout.cols);
   identity.setIdentity();
@@ -674,17 +594,19 @@ void KeyframeGraph::ComputeCovariances() {
   }
 }
 
-Pose2 KeyframeGraph::Pose() const { return common::Compose(window_.back().pose, Increment(pending_, correction_)); }
+Pose2 KeyframeGraph::Pose() const {
+  return common::Compose(window_.back().pose, OdometryIncrement(pending_, correction_));
+}
 
 Eigen::Matrix3d KeyframeGraph::PoseCovariance() const {
   const Pose2& kf = window_.back().pose;
-  const Pose2 delta = Increment(pending_, correction_);
+  const Pose2 delta = OdometryIncrement(pending_, correction_);
   Eigen::Matrix<double, 3, 6> j;
   j.leftCols<3>() = common::ComposeJacobianLeft(kf, delta);
-  j.rightCols<3>() = common::ComposeJacobianRight(kf, delta) * IncrementJacobian(pending_);
+  j.rightCols<3>() = common::ComposeJacobianRight(kf, delta) * OdometryIncrementJacobian(pending_, correction_);
   const Eigen::Matrix3d rot = common::ComposeJacobianRight(kf, delta);
   Eigen::Matrix3d cov = j * pose_correction_cov_ * j.transpose();
-  if (!pending_.empty()) cov += rot * AccumulatedCovariance(pending_) * rot.transpose();
+  if (!pending_.empty()) cov += rot * OdometryCovariance(pending_, correction_, robot_var_) * rot.transpose();
   return 0.5 * (cov + cov.transpose());
 }
 
@@ -710,7 +632,8 @@ KeyframeGraph::Prediction KeyframeGraph::PredictMover(const Mover& mover, int st
   const Eigen::Matrix3d f = common::ComposeJacobianLeft(mover.state, delta);
   const Eigen::Matrix3d rot = common::ComposeJacobianRight(mover.state, delta);
   Eigen::Matrix3d cov = f * mover.covariance * f.transpose();
-  if (n > 0) cov += rot * Accumulate(std::vector<Pose2>(n, MoverIncrement(model, 1)), landmark_var_) * rot.transpose();
+  if (n > 0)
+    cov += rot * AccumulateCovariance(std::vector<Pose2>(n, MoverIncrement(model, 1)), landmark_var_) * rot.transpose();
   return {common::Compose(mover.state, delta), 0.5 * (cov + cov.transpose())};
 }
 

@@ -15,6 +15,7 @@
 #include "common/se2.h"
 #include "robot_agent/filters/odometry_calibration.h"
 #include "robot_agent/options/agent_options.h"
+#include "robot_agent/smoother/levenberg_marquardt.h"
 #include "robot_agent/smoother/normal_equations.h"
 
 namespace mrslam::robot_agent::smoother {
@@ -211,9 +212,6 @@ class KeyframeGraph {
   static std::uint32_t MoverTrack(std::int64_t key) { return static_cast<std::uint32_t>(key >> 32); }
   static int MoverStep(std::int64_t key) { return static_cast<int>(key & 0xffffffff); }
 
-  common::Pose2 Increment(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction) const;
-  Eigen::Matrix<double, 3, 3> IncrementJacobian(const std::vector<std::vector<Motion>>& steps) const;
-  Eigen::Matrix3d AccumulatedCovariance(const std::vector<std::vector<Motion>>& steps) const;
   static int Dim(const Var& v) { return v.kind == Var::kLandmark ? 2 : 3; }
   common::Pose2 MoverIncrement(const MoverModel& model, int steps) const;
   Eigen::Matrix3d MoverWhitening(const MoverModel& model, int steps) const;
@@ -251,7 +249,6 @@ class KeyframeGraph {
   void Marginalize();
   std::vector<Var> CovarianceTargets(const std::vector<Var>& vars) const;
   // The information matrix (with the ridge) at the solution, factorized.
-  using Factorization = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>;
   std::shared_ptr<const Factorization> Information(const std::vector<Var>& vars, const Layout& layout) const;
   void ComputeCovariances();
 

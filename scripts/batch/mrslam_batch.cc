@@ -12,10 +12,13 @@
 //   --smoother: each robot's error under the MAP smoother of the whole run, jointly and alone:
 //     smoother_reference;
 //   --slip-recovery: whether each robot's filter recovers from the scenario's slips:
-//     slip_recovery.
+//     slip_recovery;
+//   --held DIR [--union]: each robot's error under the joint estimate over the raw measurements
+//     its agent held at the end of a run (or all agents' together): held_reference.
 //
 //   mrslam_batch --scenario FILE --seeds A..B [--set k=v]... [--particles N] [--threads T]
-//                [--reference [--joint] | --transform-reference | --smoother | --slip-recovery]
+//                [--reference [--joint] | --transform-reference | --smoother | --slip-recovery |
+//                 --held DIR [--union]]
 //                [--json FILE]
 #include <cstdint>
 #include <cstdio>
@@ -29,6 +32,7 @@
 #include "common/config/scenario_options.h"
 #include "common/seed_range.h"
 #include "scripts/batch/filter_accuracy.h"
+#include "scripts/batch/held_reference.h"
 #include "scripts/batch/slip_recovery.h"
 #include "scripts/batch/smoother_reference.h"
 #include "scripts/batch/transform_reference.h"
@@ -38,10 +42,11 @@ namespace {
 
 int Main(int argc, char** argv) {
   CLI::App app{"Accuracy of each robot's own filter over seeds (in-process, no DDS)."};
-  std::string scenario_path, seeds_text = "1..50", json_path;
+  std::string scenario_path, seeds_text = "1..50", json_path, held_dir;
   std::vector<std::string> overrides;
   int particles = 0, threads = 1;
-  bool reference = false, joint = false, transform_reference = false, smoother = false, slip_recovery = false;
+  bool reference = false, joint = false, transform_reference = false, smoother = false, slip_recovery = false,
+       union_all = false;
   app.add_option("--scenario", scenario_path, "Scenario YAML file")->required();
   app.add_option("--seeds", seeds_text, "Seed range A..B (inclusive)");
   app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
@@ -66,6 +71,13 @@ int Main(int argc, char** argv) {
   app.add_flag("--slip-recovery", slip_recovery,
                "Print instead whether each slipping robot's filter recovers from its first slip (robots[].slips), "
                "against the same seed without the slips");
+  auto* held_option =
+      app.add_option("--held", held_dir,
+                     "Print instead each robot's error under the joint estimate over the raw measurements its agent "
+                     "held at the end of a run (DIR/<robot>.factors, robot_agent --factors-out; the run's scenario "
+                     "and --seeds its seed)");
+  app.add_flag("--union", union_all, "With --held: each robot's joint estimate over every agent's logs together")
+      ->needs(held_option);
   app.add_option("--json", json_path, "Write medians, 90th percentiles and per-seed values here");
   if (const auto status = common::ParseCommandLine("mrslam_batch", app, argc, argv)) return *status;
 
@@ -73,13 +85,18 @@ int Main(int argc, char** argv) {
   common::ScenarioOptions options = common::LoadScenario(scenario_path, overrides);
   if (particles > 0) options.filter.particles = particles;
   if (static_cast<int>(reference) + static_cast<int>(transform_reference) + static_cast<int>(smoother) +
-          static_cast<int>(slip_recovery) >
+          static_cast<int>(slip_recovery) + static_cast<int>(!held_dir.empty()) >
       1) {
-    throw std::runtime_error("one of --reference, --transform-reference, --smoother and --slip-recovery at most");
+    throw std::runtime_error(
+        "one of --reference, --transform-reference, --smoother, --slip-recovery and --held at most");
   }
   // The reference's oracle association: the same detections, with their identities.
   if (reference || transform_reference || smoother) options.sensors.lidar.report_identity = true;
   const auto first_seed = static_cast<std::uint64_t>(seeds.first);
+  if (!held_dir.empty()) {
+    options.seed = first_seed;
+    return PrintHeldReference(options, held_dir, union_all, json_path);
+  }
   if (transform_reference) return PrintTransformReference(options, first_seed, seeds.size(), threads, json_path);
   if (smoother) return PrintSmoother(options, first_seed, seeds.size(), threads, json_path);
   if (slip_recovery) return PrintSlipRecovery(options, first_seed, seeds.size(), threads, json_path);

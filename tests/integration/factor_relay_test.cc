@@ -1,7 +1,7 @@
 // Multi-process: raw measurements shared peer to peer on tests/integration/data/three_robots.yaml
 // (r2 and r3 meet at once, r1 and r2 half a lap later; r1 and r3 never). r3's steps reach r1
-// through r2 as r3 recorded them, no byte flows between r1 and r3, and the summary reports each
-// agent's peer traffic.
+// through r2 as r3 recorded them, no byte flows between r1 and r3, r1's joint estimate over what
+// it holds places r3's path, and the summary reports each agent's peer traffic.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -10,8 +10,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include <Eigen/LU>
+
+#include "common/angles.h"
+#include "common/config/agent_options_projection.h"
+#include "common/config/scenario_options.h"
 #include "robot_agent/cooperation/held_factors.h"
+#include "robot_agent/cooperation/joint_estimate.h"
 #include "tests/integration/child_process.h"
+#include "world_sim/source/step_source_factory.h"
 
 namespace mrslam {
 namespace {
@@ -61,6 +68,25 @@ TEST(FactorRelayTest, ARobotsStepsReachOneItNeverMetThroughAThird) {
   }
   EXPECT_GT(held["r2"].bytes_sent_to["r1"], 0U);
   EXPECT_GT(held["r2"].bytes_sent_to["r3"], 0U);
+
+  // r1 places r3 through r2: r3's frame in r1's joint estimate lies within the 99.9% ellipsoid
+  // of its covariance around the true one.
+  const common::ScenarioOptions scenario =
+      common::LoadScenario(testing::SourcePath("tests/integration/data/three_robots.yaml"), {});
+  const auto joint =
+      robot_agent::cooperation::SolveJoint(common::AgentOptionsFor(scenario, "r1"), "r1", held["r1"].logs);
+  EXPECT_TRUE(joint.not_placed.empty());
+  const auto frames = world_sim::MakeStepSource(scenario)->Truth().frames;
+  const common::Pose2 truth = common::Compose(common::Inverse(frames.at(0).second), frames.at(2).second);
+  bool placed_r3 = false;
+  for (const auto& f : joint.frames) {
+    if (f.robot != "r3") continue;
+    placed_r3 = true;
+    const Eigen::Vector3d e(f.t_self_robot.x - truth.x, f.t_self_robot.y - truth.y,
+                            common::WrapAngle(f.t_self_robot.heading - truth.heading));
+    EXPECT_LT(e.dot(f.covariance.inverse() * e), 16.27) << e.transpose();
+  }
+  EXPECT_TRUE(placed_r3);
 
   std::ifstream in(out + "/summary.json");
   const auto summary = nlohmann::json::parse(in, nullptr, false);

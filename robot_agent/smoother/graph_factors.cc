@@ -1,0 +1,76 @@
+#include "robot_agent/smoother/graph_factors.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "common/angles.h"
+
+namespace mrslam::robot_agent::smoother {
+
+using common::Pose2;
+using common::WrapAngle;
+
+BetweenJacobians BetweenWithJacobians(const Pose2& a, const Pose2& b) {
+  const double c = std::cos(a.heading), s = std::sin(a.heading);
+  const double dx = b.x - a.x, dy = b.y - a.y;
+  BetweenJacobians out;
+  out.value << c * dx + s * dy, -s * dx + c * dy, WrapAngle(b.heading - a.heading);
+  out.ja << -c, -s, -s * dx + c * dy, s, -c, -c * dx - s * dy, 0.0, 0.0, -1.0;
+  out.jb << c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0;
+  return out;
+}
+
+Pose2 OdometryIncrement(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction) {
+  Pose2 out;
+  for (const auto& step : steps) {
+    for (const auto& m : step) {
+      out = common::UnicycleStep(out, correction(0) * m.v_mps, correction(1) * m.w_radps + correction(2), m.dt_s);
+    }
+  }
+  return out;
+}
+
+Eigen::Matrix3d OdometryIncrementJacobian(const std::vector<std::vector<Motion>>& steps,
+                                          const Eigen::Vector3d& correction) {
+  constexpr double kH = 1e-6;
+  Eigen::Matrix3d j;
+  for (int c = 0; c < 3; ++c) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    d(c) = kH;
+    const Pose2 plus = OdometryIncrement(steps, correction + d), minus = OdometryIncrement(steps, correction - d);
+    j.col(c) = Eigen::Vector3d(plus.x - minus.x, plus.y - minus.y, WrapAngle(plus.heading - minus.heading)) / (2 * kH);
+  }
+  return j;
+}
+
+Eigen::Matrix3d AccumulateCovariance(const std::vector<Pose2>& increments, const Eigen::Vector3d& var) {
+  Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
+  Pose2 delta;
+  for (const Pose2& d : increments) {
+    const Eigen::Matrix3d j = common::ComposeJacobianLeft(delta, d);
+    sigma = j * sigma * j.transpose();
+    sigma.diagonal() += var.unaryExpr([](double v) { return std::max(v, 1e-12); });
+    delta = common::Compose(delta, d);
+  }
+  return sigma;
+}
+
+Eigen::Matrix3d OdometryCovariance(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction,
+                                   const Eigen::Vector3d& var) {
+  std::vector<Pose2> increments;
+  increments.reserve(steps.size());
+  for (const auto& step : steps) increments.push_back(OdometryIncrement({step}, correction));
+  return AccumulateCovariance(increments, var);
+}
+
+Eigen::Matrix3d Whitening(const Eigen::Matrix3d& sigma) { return Eigen::Matrix3d(sigma.llt().matrixL()).inverse(); }
+
+Huber HuberLoss(double s, double k) {
+  if (s <= k) return {1.0, s * s};
+  return {std::sqrt(k / s), 2.0 * k * s - k * k};
+}
+
+}  // namespace mrslam::robot_agent::smoother

@@ -1,0 +1,45 @@
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/se2.h"
+#include "robot_agent/filters/odometry_calibration.h"
+
+// The maths the factor graphs share (KeyframeGraph, JointGraph): the odometry increment between
+// keyframes under an odometry correction, its covariance and Jacobian, and Between's Jacobians.
+namespace mrslam::robot_agent::smoother {
+
+using Motion = filters::OdometryCalibration::Motion;
+
+// Between(a, b) as a vector (heading wrapped), and its Jacobians with respect to a and b.
+struct BetweenJacobians {
+  Eigen::Vector3d value;
+  Eigen::Matrix3d ja, jb;
+};
+BetweenJacobians BetweenWithJacobians(const common::Pose2& a, const common::Pose2& b);
+
+// The motion over `steps` (each step's calibrated odometry segments) under the correction
+// c = (s_v, s_w, b_w): unicycle steps at (s_v v, s_w w + b_w), composed from the origin.
+common::Pose2 OdometryIncrement(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction);
+// d OdometryIncrement / d correction at `correction`, by central differences (heading wrapped).
+Eigen::Matrix3d OdometryIncrementJacobian(const std::vector<std::vector<Motion>>& steps,
+                                          const Eigen::Vector3d& correction);
+// The covariance of a composition of per-step increments, each with additive noise of
+// variances var in the frame it starts from: Sigma_i = J Sigma_{i-1} J^T + diag(var).
+Eigen::Matrix3d AccumulateCovariance(const std::vector<common::Pose2>& increments, const Eigen::Vector3d& var);
+// The covariance of OdometryIncrement accumulated step by step, var per step.
+Eigen::Matrix3d OdometryCovariance(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction,
+                                   const Eigen::Vector3d& var);
+// L^-1 with Sigma = L L^T: whitens a residual of covariance Sigma.
+Eigen::Matrix3d Whitening(const Eigen::Matrix3d& sigma);
+
+// The Huber loss of width k on a whitened residual block of norm s: the factor that scales the
+// block (1 within k, sqrt(k / s) beyond, iteratively reweighted) and the loss it adds to the cost.
+struct Huber {
+  double scale = 1.0, cost = 0.0;
+};
+Huber HuberLoss(double s, double k);
+
+}  // namespace mrslam::robot_agent::smoother

@@ -1,0 +1,38 @@
+#pragma once
+
+#include <functional>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "robot_agent/smoother/normal_equations.h"
+
+namespace mrslam::robot_agent::smoother {
+
+using Factorization = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>;
+
+// A least-squares problem as Levenberg-Marquardt sees it: its normal equations at the current
+// values (only the cost without jacobians), and the values moved by a step, kept or put back.
+struct LeastSquares {
+  int cols = 0;
+  std::function<NormalEquations(bool jacobians)> equations;
+  std::function<void(const Eigen::VectorXd& delta)> step;  // x += delta (angles wrapped by the caller)
+  std::function<void()> save, restore;                     // the values before a step, and back to them
+};
+
+struct LmResult {
+  double cost = 0.0;
+  double factorized_lambda = 0.0;  // the damping of the last factorization
+  bool factorized = false;         // the last factorization succeeded
+};
+
+// Levenberg-Marquardt on the sparse normal equations H = J^T J (+ priors), g = J^T r: at most
+// max_iterations times, solve (H + lambda diag(H) + ridge I) delta = -g (diag floored at 1e-9),
+// keep the step if the cost falls (lambda / 10, at least 1e-9), else put it back (lambda x 10;
+// give up beyond 1e6); stop once the step's largest entry is below 1e-7 or the cost falls by
+// less than 1e-6 (1 + cost). Lambda starts at 1e-6. The ridge keeps a variable nothing informs
+// from making H singular. `solver` keeps the last factorization (for covariances).
+LmResult LevenbergMarquardt(const LeastSquares& problem, int max_iterations, double ridge, Factorization* solver);
+
+}  // namespace mrslam::robot_agent::smoother
