@@ -370,11 +370,16 @@ struct AgentNode::Impl {
     return static_cast<std::uint32_t>(chunks.size());
   }
 
-  // The final trajectory: with the raw measurements shared and the own ones held to step k, the
-  // own path of the joint estimate over everything held; else the estimator's.
+  // The final trajectory: with the raw measurements shared, the own ones held to step k and the
+  // landmarks taken as static (the joint graph has no model of moving ones), the own path of the
+  // joint estimate over everything held; else the estimator's.
   std::vector<std::pair<int, common::Pose2>> FinalPath(std::uint32_t k) const {
     const auto& x = cooperation.exchange();
     if (!agent.cooperation.share_factors || x.Held(agent.robot_id) < k) return filter->FinalTrajectory();
+    if (agent.filter.landmark_kinematics != LandmarkKinematics::kStatic) {
+      spdlog::info("final trajectory: the estimator's, as the joint graph models static landmarks only");
+      return filter->FinalTrajectory();
+    }
     const auto joint = cooperation::SolveJoint(agent, agent.robot_id, x.logs());
     for (const auto& f : joint.frames) {
       const Eigen::Vector3d sd = f.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();

@@ -33,17 +33,39 @@ Pose2 OdometryIncrement(const std::vector<std::vector<Motion>>& steps, const Eig
   return out;
 }
 
-Eigen::Matrix3d OdometryIncrementJacobian(const std::vector<std::vector<Motion>>& steps,
-                                          const Eigen::Vector3d& correction) {
-  constexpr double kH = 1e-6;
-  Eigen::Matrix3d j;
-  for (int c = 0; c < 3; ++c) {
-    Eigen::Vector3d d = Eigen::Vector3d::Zero();
-    d(c) = kH;
-    const Pose2 plus = OdometryIncrement(steps, correction + d), minus = OdometryIncrement(steps, correction - d);
-    j.col(c) = Eigen::Vector3d(plus.x - minus.x, plus.y - minus.y, WrapAngle(plus.heading - minus.heading)) / (2 * kH);
+OdometryIncrementJacobians OdometryIncrementWithJacobian(const std::vector<std::vector<Motion>>& steps,
+                                                         const Eigen::Vector3d& correction) {
+  OdometryIncrementJacobians out;
+  for (const auto& step : steps) {
+    for (const auto& m : step) {
+      const common::LinearizedUnicycleStep u = common::UnicycleStepWithJacobians(
+          out.delta, correction(0) * m.v_mps, correction(1) * m.w_radps + correction(2), m.dt_s);
+      Eigen::Matrix<double, 2, 3> d_input;
+      d_input << m.v_mps, 0.0, 0.0, 0.0, m.w_radps, 1.0;
+      out.d_correction = u.f * out.d_correction + u.g * d_input;
+      out.delta = u.next;
+    }
   }
-  return j;
+  return out;
+}
+
+OdometryFactor OdometryResidual(const Pose2& a, const Pose2& b, const std::vector<std::vector<Motion>>& steps,
+                                const Eigen::Vector3d& correction, const Eigen::Matrix3d& whitening, bool jacobians) {
+  const BetweenJacobians between = BetweenWithJacobians(a, b);
+  OdometryFactor out;
+  Eigen::Vector3d e;
+  if (jacobians) {
+    const OdometryIncrementJacobians increment = OdometryIncrementWithJacobian(steps, correction);
+    e = between.value - increment.delta.Vector();
+    out.d_a = whitening * between.ja;
+    out.d_b = whitening * between.jb;
+    out.d_correction = -whitening * increment.d_correction;
+  } else {
+    e = between.value - OdometryIncrement(steps, correction).Vector();
+  }
+  e(2) = WrapAngle(e(2));
+  out.residual = whitening * e;
+  return out;
 }
 
 Eigen::Matrix3d AccumulateCovariance(const std::vector<Pose2>& increments, const Eigen::Vector3d& var) {

@@ -23,9 +23,25 @@ BetweenJacobians BetweenWithJacobians(const common::Pose2& a, const common::Pose
 // The motion over `steps` (each step's calibrated odometry segments) under the correction
 // c = (s_v, s_w, b_w): unicycle steps at (s_v v, s_w w + b_w), composed from the origin.
 common::Pose2 OdometryIncrement(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction);
-// d OdometryIncrement / d correction at `correction`, by central differences (heading wrapped).
-Eigen::Matrix3d OdometryIncrementJacobian(const std::vector<std::vector<Motion>>& steps,
-                                          const Eigen::Vector3d& correction);
+// OdometryIncrement and its Jacobian with respect to the correction, in one pass: through each
+// unicycle step J <- F J + G [v 0 0; 0 w 1] (F, G: UnicycleStepWithJacobians), from J = 0.
+struct OdometryIncrementJacobians {
+  common::Pose2 delta;
+  Eigen::Matrix3d d_correction = Eigen::Matrix3d::Zero();
+};
+OdometryIncrementJacobians OdometryIncrementWithJacobian(const std::vector<std::vector<Motion>>& steps,
+                                                         const Eigen::Vector3d& correction);
+// The odometry factor between consecutive keyframes a and b: r = W (Between(x_a, x_b) -
+// OdometryIncrement(steps, c)), heading wrapped, and (with jacobians) its Jacobians with respect
+// to x_a, x_b and c.
+struct OdometryFactor {
+  Eigen::Vector3d residual;
+  Eigen::Matrix3d d_a, d_b, d_correction;
+};
+OdometryFactor OdometryResidual(const common::Pose2& a, const common::Pose2& b,
+                                const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction,
+                                const Eigen::Matrix3d& whitening, bool jacobians);
+
 // The covariance of a composition of per-step increments, each with additive noise of
 // variances var in the frame it starts from: Sigma_i = J Sigma_{i-1} J^T + diag(var).
 Eigen::Matrix3d AccumulateCovariance(const std::vector<common::Pose2>& increments, const Eigen::Vector3d& var);

@@ -263,16 +263,13 @@ void JointGraph::AddOdometryRows(int r, NormalEquations* rows) const {
   const Robot& robot = robots_[r];
   for (int k = 1; k < robot.active; ++k) {
     const Keyframe& kf = robot.keyframes[k];
-    const BetweenJacobians b = BetweenWithJacobians(robot.keyframes[k - 1].pose, kf.pose);
-    Eigen::Vector3d e = b.value - OdometryIncrement(kf.steps, robot.correction).Vector();
-    e(2) = WrapAngle(e(2));
-    const Eigen::Vector3d res = kf.whitening * e;
-    rows->cost += res.squaredNorm();
-    if (!rows->jacobians) continue;
-    const Eigen::Matrix3d jc = -kf.whitening * OdometryIncrementJacobian(kf.steps, robot.correction);
-    rows->Add(
-        res,
-        {{PoseCol(r, k - 1), kf.whitening * b.ja}, {PoseCol(r, k), kf.whitening * b.jb}, {robot.correction_col, jc}});
+    const OdometryFactor f = OdometryResidual(robot.keyframes[k - 1].pose, kf.pose, kf.steps, robot.correction,
+                                              kf.whitening, rows->jacobians);
+    rows->cost += f.residual.squaredNorm();
+    if (rows->jacobians) {
+      rows->Add(f.residual,
+                {{PoseCol(r, k - 1), f.d_a}, {PoseCol(r, k), f.d_b}, {robot.correction_col, f.d_correction}});
+    }
   }
 }
 

@@ -273,20 +273,14 @@ Eigen::Vector2d KeyframeGraph::WhitenedResidual(const Pose2& x, const Eigen::Vec
 
 void KeyframeGraph::AddOdometryRows(const Layout& layout, const Keyframe& previous, const Keyframe& kf,
                                     Rows* rows) const {
-  const BetweenJacobians b = BetweenWithJacobians(previous.pose, kf.pose);
-  const Pose2 delta = OdometryIncrement(kf.steps, correction_);
-  Eigen::Vector3d e = b.value - delta.Vector();
-  e(2) = WrapAngle(e(2));
-  const Eigen::Matrix3d& w = kf.odometry_whitening;
-  const Eigen::Vector3d r = w * e;
-  rows->cost += r.squaredNorm();
+  const OdometryFactor f =
+      OdometryResidual(previous.pose, kf.pose, kf.steps, correction_, kf.odometry_whitening, rows->jacobians);
+  rows->cost += f.residual.squaredNorm();
   if (!rows->jacobians) return;
   const int c_col = layout.Col({Var::kCorrection, 0});
-  const Eigen::Matrix3d jc =
-      c_col < 0 ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(-w * OdometryIncrementJacobian(kf.steps, correction_));
-  rows->Add(r, {{previous.fixed ? -1 : layout.Col({Var::kPose, previous.step}), w * b.ja},
-                {layout.Col({Var::kPose, kf.step}), w * b.jb},
-                {c_col, jc}});
+  rows->Add(f.residual, {{previous.fixed ? -1 : layout.Col({Var::kPose, previous.step}), f.d_a},
+                         {layout.Col({Var::kPose, kf.step}), f.d_b},
+                         {c_col, f.d_correction}});
 }
 
 void KeyframeGraph::AddReadingRows(const Layout& layout, const Keyframe& kf, Rows* rows) const {
@@ -600,10 +594,11 @@ Pose2 KeyframeGraph::Pose() const {
 
 Eigen::Matrix3d KeyframeGraph::PoseCovariance() const {
   const Pose2& kf = window_.back().pose;
-  const Pose2 delta = OdometryIncrement(pending_, correction_);
+  const OdometryIncrementJacobians increment = OdometryIncrementWithJacobian(pending_, correction_);
+  const Pose2& delta = increment.delta;
   Eigen::Matrix<double, 3, 6> j;
   j.leftCols<3>() = common::ComposeJacobianLeft(kf, delta);
-  j.rightCols<3>() = common::ComposeJacobianRight(kf, delta) * OdometryIncrementJacobian(pending_, correction_);
+  j.rightCols<3>() = common::ComposeJacobianRight(kf, delta) * increment.d_correction;
   const Eigen::Matrix3d rot = common::ComposeJacobianRight(kf, delta);
   Eigen::Matrix3d cov = j * pose_correction_cov_ * j.transpose();
   if (!pending_.empty()) cov += rot * OdometryCovariance(pending_, correction_, robot_var_) * rot.transpose();
