@@ -303,12 +303,14 @@ void JointGraph::AddCorrectionPrior(int r, NormalEquations* rows) const {
 
 NormalEquations JointGraph::Equations(bool jacobians) const {
   NormalEquations rows(cols_, jacobians);
+  if (jacobians) rows.h.reserve(triplets_);
   for (int r = 0; r < Robots(); ++r) {
     if (robots_[r].active == 0) continue;
     AddOdometryRows(r, &rows);
     AddObservationRows(r, &rows);
     AddCorrectionPrior(r, &rows);
   }
+  if (jacobians) triplets_ = rows.h.size();
   return rows;
 }
 

@@ -156,6 +156,7 @@ class JointGraph {
   std::map<std::pair<int, int>, int> landmark_index_;  // (namespace, label) -> index
   std::vector<int> landmark_col_;
   int cols_ = 0;
+  mutable std::size_t triplets_ = 0;  // of the last normal equations built: the next one's reserve
   Factorization information_;
   bool information_ok_ = false;
 };
