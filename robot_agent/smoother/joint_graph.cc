@@ -130,7 +130,6 @@ int JointGraph::LandmarkIndex(int r, int label) {
   if (added) {
     landmarks_.emplace_back(Eigen::Vector2d::Zero());
     landmark_started_.push_back(false);
-    landmark_labels_.emplace_back(r, label);
   }
   return it->second;
 }
@@ -414,31 +413,13 @@ Eigen::Matrix3d JointGraph::FrameCovariance(int r) const {
   return j * marginal * j.transpose();
 }
 
-std::vector<JointGraph::Landmark> JointGraph::Landmarks() const {
-  std::vector<Landmark> out;
-  for (std::size_t j = 0; j < landmarks_.size(); ++j) {
-    if (landmark_col_[j] >= 0) out.push_back({landmark_labels_[j].first, landmark_labels_[j].second, landmarks_[j]});
-  }
-  return out;
-}
-
-int JointGraph::Readings() const {
+int JointGraph::CountReadings(bool only_outliers) const {
   int n = 0;
   for (const Robot& robot : robots_) {
     for (int k = 0; k < robot.active; ++k) {
       const Keyframe& kf = robot.keyframes[k];
-      for (const Observation& o : kf.observations) n += TargetActive(o, kf.step) ? 1 : 0;
-    }
-  }
-  return n;
-}
-
-int JointGraph::Outliers() const {
-  int n = 0;
-  for (const Robot& robot : robots_) {
-    for (int k = 0; k < robot.active; ++k) {
-      const Keyframe& kf = robot.keyframes[k];
-      for (const Observation& o : kf.observations) n += !o.inlier && TargetActive(o, kf.step) ? 1 : 0;
+      for (const Observation& o : kf.observations)
+        n += (!only_outliers || !o.inlier) && TargetActive(o, kf.step) ? 1 : 0;
     }
   }
   return n;

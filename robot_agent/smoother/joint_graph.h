@@ -61,11 +61,6 @@ class JointGraph {
     common::Pose2 first_pose;  // in its own frame
     const std::vector<common::SensorStep>* steps = nullptr;
   };
-  struct Landmark {
-    int robot = 0;  // whose label (identities: the first robot that read it)
-    int label = 0;
-    Eigen::Vector2d position = Eigen::Vector2d::Zero();
-  };
 
   // robots[0]: the agent's own. Builds the graph and its starting values; Solve solves it.
   JointGraph(const AgentOptions& options, const std::vector<RobotLog>& robots);
@@ -78,11 +73,9 @@ class JointGraph {
   // T(G_self <- G_r) and its covariance (r placed; robot 0: the identity, zero covariance).
   common::Pose2 Frame(int r) const;
   Eigen::Matrix3d FrameCovariance(int r) const;
-  const Eigen::Vector3d& Correction(int r) const { return robots_.at(r).correction; }
-  std::vector<Landmark> Landmarks() const;
   // Readings left out by the gate at the solution, and readings in the graph.
-  int Outliers() const;
-  int Readings() const;
+  int Outliers() const { return CountReadings(true); }
+  int Readings() const { return CountReadings(false); }
 
  private:
   struct Observation {
@@ -137,6 +130,7 @@ class JointGraph {
   Eigen::Vector2d WhitenedResidual(const common::Pose2& x, const Eigen::Vector2d& p, const Observation& o) const;
   void Step(const Eigen::VectorXd& delta);
   bool UpdateInliers();
+  int CountReadings(bool only_outliers) const;
 
   static constexpr double kRidge = 1e-9;
   static constexpr double kSolveEveryS = 30.0;
@@ -152,7 +146,6 @@ class JointGraph {
   std::vector<Robot> robots_;
   std::vector<Eigen::Vector2d> landmarks_;
   std::vector<bool> landmark_started_;
-  std::vector<std::pair<int, int>> landmark_labels_;   // per landmark: (robot, label)
   std::map<std::pair<int, int>, int> landmark_index_;  // (namespace, label) -> index
   std::vector<int> landmark_col_;
   int cols_ = 0;
