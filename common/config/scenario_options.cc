@@ -460,6 +460,7 @@ void ParseCooperation(Section& top, ScenarioOptions* o) {
   d.exchange_window_steps = c.Get("exchange_window_steps", d.exchange_window_steps);
   d.max_batch_steps = c.Get("max_batch_steps", d.max_batch_steps);
   d.relay_factors = c.Get("relay_factors", d.relay_factors);
+  d.joint_every_s = c.Get("joint_every_s", d.joint_every_s);
   c.RejectUnknownKeys();
 }
 
@@ -850,6 +851,8 @@ void CheckCooperation(const ScenarioOptions& o, Checker* c) {
            co.exchange_window_steps, "must be in 1..100000");
   c->Check(co.max_batch_steps >= 1 && co.max_batch_steps <= 10000, "cooperation.max_batch_steps", co.max_batch_steps,
            "must be in 1..10000");
+  c->Check(std::isfinite(co.joint_every_s) && co.joint_every_s >= 0.0, "cooperation.joint_every_s", co.joint_every_s,
+           "must be >= 0 (0: only at the end)");
 }
 
 }  // namespace

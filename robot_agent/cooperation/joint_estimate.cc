@@ -2,20 +2,20 @@
 
 #include <stdexcept>
 
-#include "robot_agent/smoother/joint_graph.h"
-
 namespace mrslam::robot_agent::cooperation {
 
-JointEstimate SolveJoint(const AgentOptions& options, const std::string& self,
-                         const std::map<std::string, FactorLog>& logs) {
+std::vector<smoother::JointGraph::RobotLog> RobotLogs(const std::string& self,
+                                                      const std::map<std::string, FactorLog>& logs) {
   const auto own = logs.find(self);
   if (own == logs.end()) throw std::invalid_argument("no log of the own robot " + self);
   std::vector<smoother::JointGraph::RobotLog> robots{{self, own->second.first_pose, &own->second.steps}};
   for (const auto& [origin, log] : logs) {
     if (origin != self) robots.push_back({origin, log.first_pose, &log.steps});
   }
-  smoother::JointGraph graph(options, robots);
-  graph.Solve();
+  return robots;
+}
+
+JointEstimate Summarize(const smoother::JointGraph& graph, const std::vector<smoother::JointGraph::RobotLog>& robots) {
   JointEstimate out;
   out.path = graph.Path(0);
   for (int r = 1; r < graph.Robots(); ++r) {
@@ -28,6 +28,14 @@ JointEstimate SolveJoint(const AgentOptions& options, const std::string& self,
   out.readings = graph.Readings();
   out.outliers = graph.Outliers();
   return out;
+}
+
+JointEstimate SolveJoint(const AgentOptions& options, const std::string& self,
+                         const std::map<std::string, FactorLog>& logs) {
+  const auto robots = RobotLogs(self, logs);
+  smoother::JointGraph graph(options, robots);
+  graph.Solve();
+  return Summarize(graph, robots);
 }
 
 }  // namespace mrslam::robot_agent::cooperation

@@ -10,6 +10,7 @@
 #include "common/se2.h"
 #include "robot_agent/cooperation/factor_exchange.h"
 #include "robot_agent/options/agent_options.h"
+#include "robot_agent/smoother/joint_graph.h"
 
 // The joint estimate over the raw measurements an agent holds (docs/cooperation.md): the joint
 // graph (smoother/joint_graph.h) of its own steps and every other origin's it holds, solved.
@@ -29,7 +30,14 @@ struct JointEstimate {
   int readings = 0, outliers = 0;
 };
 
-// Solves the joint graph over `logs` (FactorExchange::logs or HeldFactors::logs), `self`'s first.
+// The joint graph's robots from `logs` (FactorExchange::logs or HeldFactors::logs): `self`'s
+// first, then the others in id order (pointing into logs).
+std::vector<smoother::JointGraph::RobotLog> RobotLogs(const std::string& self,
+                                                      const std::map<std::string, FactorLog>& logs);
+// What a solved graph of `robots` gives the agent.
+JointEstimate Summarize(const smoother::JointGraph& graph, const std::vector<smoother::JointGraph::RobotLog>& robots);
+
+// Solves the joint graph over `logs`, `self`'s first.
 JointEstimate SolveJoint(const AgentOptions& options, const std::string& self,
                          const std::map<std::string, FactorLog>& logs);
 

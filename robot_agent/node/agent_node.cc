@@ -18,6 +18,7 @@
 #include "robot_agent/cooperation/cooperation.h"
 #include "robot_agent/cooperation/held_factors.h"
 #include "robot_agent/cooperation/joint_estimate.h"
+#include "robot_agent/cooperation/joint_tracker.h"
 #include "robot_agent/cooperation/sample_intake.h"
 #include "robot_agent/cooperation/sample_validation.h"
 #include "robot_agent/node/msg_conversion.h"
@@ -48,6 +49,7 @@ struct AgentNode::Impl {
   std::map<std::string, std::unique_ptr<PeerReaders>> from_peers;
   std::map<std::string, std::unique_ptr<PeerWriters>> peers;
   cooperation::Cooperation cooperation;
+  cooperation::JointTracker joint_tracker;
   // Peer messages received, by the sender's step: applied at the start of the next step.
   std::map<std::uint32_t, cooperation::PeerInbox> inbox;
   // (sender, step) -> the sequence numbers received, for the steps not yet applied.
@@ -82,6 +84,7 @@ struct AgentNode::Impl {
         ack_writer(participant, dds::AckTopic(a.robot_id)),
         final_writer(participant, dds::FinalTrajectoryTopic(a.robot_id), dds::History::kWhole),
         cooperation(a),
+        joint_tracker(a),
         lidar(o.horizon_steps),
         imu(o.horizon_steps),
         odometry(o.horizon_steps) {
@@ -370,17 +373,28 @@ struct AgentNode::Impl {
     return static_cast<std::uint32_t>(chunks.size());
   }
 
+  // With sharing among static landmarks: the joint estimate solved again when due, and logged.
+  void TrackJoint(std::uint32_t k, const filters::FilterEstimate& estimate) {
+    const int before = joint_tracker.solves();
+    const auto& x = cooperation.exchange();
+    joint_tracker.AfterStep(k, estimate, x.logs(), x.steps_received());
+    if (joint_tracker.solves() == before) return;
+    const common::Pose2& c = joint_tracker.correction();
+    spdlog::info("joint estimate at step {}: the own estimate moved by ({:.3f}, {:.3f}, {:.4f} rad)", k, c.x, c.y,
+                 c.heading);
+  }
+
   // The final trajectory: with the raw measurements shared, the own ones held to step k and the
   // landmarks taken as static (the joint graph has no model of moving ones), the own path of the
   // joint estimate over everything held; else the estimator's.
-  std::vector<std::pair<int, common::Pose2>> FinalPath(std::uint32_t k) const {
+  std::vector<std::pair<int, common::Pose2>> FinalPath(std::uint32_t k) {
     const auto& x = cooperation.exchange();
     if (!agent.cooperation.share_factors || x.Held(agent.robot_id) < k) return filter->FinalTrajectory();
-    if (agent.filter.landmark_kinematics != LandmarkKinematics::kStatic) {
+    if (!cooperation::JointTracker::Enabled(agent)) {
       spdlog::info("final trajectory: the estimator's, as the joint graph models static landmarks only");
       return filter->FinalTrajectory();
     }
-    const auto joint = cooperation::SolveJoint(agent, agent.robot_id, x.logs());
+    const auto joint = joint_tracker.Final(x.logs());
     for (const auto& f : joint.frames) {
       const Eigen::Vector3d sd = f.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
       spdlog::info("joint estimate: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad), sd ({:.3f} m, {:.3f} m, {:.4f} rad)",
@@ -418,6 +432,7 @@ struct AgentNode::Impl {
     ar(next_step, step_times, inbox, received, applied_sequence, sent_sequence, counters.steps_processed,
        counters.rejected.by_kind, rendezvous_logged, bytes_sent_to, bytes_received_from);
     cooperation.Io(ar);
+    joint_tracker.Io(ar);
     filter->Io(ar);
   }
 
@@ -541,10 +556,11 @@ struct AgentNode::Impl {
     const filters::FilterEstimate estimate = filter->Estimate();
     cooperation::PeerOutbox outbox = cooperation.AfterStep(step, estimate);
     outbox.moved = cooperation.MovedNotices(filter->TakeMovedLandmarks(), k, time_s);
+    if (cooperation::JointTracker::Enabled(agent)) TrackJoint(k, estimate);
     const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s);
     const auto sent = Send(std::move(outbox));
     LogRendezvous(k, *last);
-    msg::Estimate m = ToMsg(estimate, agent.robot_id, agent.filter.type);
+    msg::Estimate m = ToMsg(joint_tracker.Corrected(estimate), agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
     m.frames_known(cooperation.frames_known());
     m.rejected_samples(counters.rejected.Total());

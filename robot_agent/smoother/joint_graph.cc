@@ -125,7 +125,7 @@ void JointGraph::AddObservations(const std::vector<RobotLog>& logs, int r) {
 }
 
 int JointGraph::LandmarkIndex(int r, int label) {
-  const std::pair<int, int> key(identities_ ? 0 : r + 1, label);
+  const std::pair<std::string, int> key(identities_ ? std::string() : robots_[r].id, label);
   const auto [it, added] = landmark_index_.emplace(key, static_cast<int>(landmarks_.size()));
   if (added) {
     landmarks_.emplace_back(Eigen::Vector2d::Zero());
@@ -345,7 +345,7 @@ bool JointGraph::UpdateInliers() {
   return changed;
 }
 
-void JointGraph::Solve() {
+void JointGraph::Solve(bool to_convergence) {
   std::vector<Pose2> saved_poses;
   std::vector<Eigen::Vector3d> saved_corrections;
   std::vector<Eigen::Vector2d> saved_landmarks;
@@ -372,21 +372,52 @@ void JointGraph::Solve() {
   // Solved over a horizon that grows by kSolveEveryS of run time, each solve warm-started from
   // the last: Gauss-Newton from the dead-reckoned paths of a whole run falls into local minima.
   const int every = std::max(1, static_cast<int>(std::lround(kSolveEveryS / options_.dt_s)));
-  for (int horizon = std::min(every, last_step_);; horizon = std::min(horizon + every, last_step_)) {
+  for (int horizon = std::min(solved_to_ + every, last_step_);; horizon = std::min(horizon + every, last_step_)) {
     Activate(horizon);
     problem.cols = cols_;
-    const bool last = horizon == last_step_;
+    const bool last = to_convergence && horizon == last_step_;
+    // The last horizon to convergence: a solution independent of the way to it, to about 1e-7.
+    problem.min_step = last ? 1e-9 : 1e-7;
+    problem.min_relative_decrease = last ? 1e-14 : 1e-6;
     for (int round = 0; round < (last ? kRounds : 1); ++round) {
       Factorization solver;
       LevenbergMarquardt(problem, last ? kIterations : kHorizonIterations, kRidge, &solver);
       if (!UpdateInliers()) break;
     }
-    if (last) break;
+    if (horizon == last_step_) break;
   }
+  solved_to_ = last_step_;
   Eigen::SparseMatrix<double> identity(cols_, cols_);
   identity.setIdentity();
   information_.compute(Equations(true).Matrix() + kRidge * identity);
   information_ok_ = information_.info() == Eigen::Success;
+}
+
+void JointGraph::WarmStart(const JointGraph& previous) {
+  for (Robot& robot : robots_) {
+    const auto it = std::find_if(previous.robots_.begin(), previous.robots_.end(),
+                                 [&](const Robot& p) { return p.id == robot.id && p.placed; });
+    if (it == previous.robots_.end()) continue;
+    robot.placed = true;
+    robot.correction = it->correction;
+    robot.active = 1;
+    robot.keyframes.front().pose = it->keyframes.front().pose;
+    for (std::size_t k = 1; k < robot.keyframes.size() && robot.keyframes[k].step <= previous.solved_to_; ++k) {
+      Keyframe& kf = robot.keyframes[k];
+      const auto held = it->keyframe_at.find(kf.step);
+      kf.pose = held != it->keyframe_at.end() && held->second < it->active
+                    ? it->keyframes[held->second].pose
+                    : common::Compose(robot.keyframes[k - 1].pose, OdometryIncrement(kf.steps, robot.correction));
+      robot.active = static_cast<int>(k) + 1;
+    }
+  }
+  for (const auto& [key, j] : landmark_index_) {
+    const auto held = previous.landmark_index_.find(key);
+    if (held == previous.landmark_index_.end() || !previous.landmark_started_[held->second]) continue;
+    landmarks_[j] = previous.landmarks_[held->second];
+    landmark_started_[j] = true;
+  }
+  solved_to_ = std::min(previous.solved_to_, last_step_);
 }
 
 std::vector<std::pair<int, Pose2>> JointGraph::Path(int r) const {

@@ -64,7 +64,15 @@ class JointGraph {
 
   // robots[0]: the agent's own. Builds the graph and its starting values; Solve solves it.
   JointGraph(const AgentOptions& options, const std::vector<RobotLog>& robots);
-  void Solve();
+  // Starts from `previous`, a graph of the same robots' logs as they were earlier (each a prefix
+  // of the one now, robots new since then may be added): every robot it placed is placed, its
+  // keyframes up to the step previous was solved to start at previous's poses (a keyframe new
+  // among them, by its odometry from the one before), its correction and the landmarks at
+  // previous's, and Solve goes on from that step. Call before Solve.
+  void WarmStart(const JointGraph& previous);
+  // Solves over the growing horizon; the last horizon (to_convergence) to convergence, or else as
+  // the others, a few iterations and one decision of the gate (a warm-started update, cheaper).
+  void Solve(bool to_convergence = true);
 
   int Robots() const { return static_cast<int>(robots_.size()); }
   bool Placed(int r) const { return robots_.at(r).placed; }
@@ -138,6 +146,7 @@ class JointGraph {
 
   int gap_steps_, window_steps_;
   int last_step_ = 0;
+  int solved_to_ = 0;  // the horizon solved so far (WarmStart: the previous graph's)
   bool identities_;
   double huber_k_, gate_;
   Eigen::Vector3d robot_var_, prior_w_;
@@ -146,7 +155,8 @@ class JointGraph {
   std::vector<Robot> robots_;
   std::vector<Eigen::Vector2d> landmarks_;
   std::vector<bool> landmark_started_;
-  std::map<std::pair<int, int>, int> landmark_index_;  // (namespace, label) -> index
+  // (the labelling robot's id, or empty for an identity; label) -> index
+  std::map<std::pair<std::string, int>, int> landmark_index_;
   std::vector<int> landmark_col_;
   int cols_ = 0;
   mutable std::size_t triplets_ = 0;  // of the last normal equations built: the next one's reserve

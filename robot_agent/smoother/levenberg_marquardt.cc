@@ -31,7 +31,9 @@ LmResult LevenbergMarquardt(const LeastSquares& problem, int max_iterations, dou
     const double decrease = out.cost - after;
     out.cost = after;
     lambda = std::max(lambda / 10.0, 1e-9);
-    if (delta.cwiseAbs().maxCoeff() < 1e-7 || decrease < 1e-6 * (1.0 + out.cost)) break;
+    if (delta.cwiseAbs().maxCoeff() < problem.min_step || decrease < problem.min_relative_decrease * (1.0 + out.cost)) {
+      break;
+    }
   }
   return out;
 }

@@ -19,6 +19,7 @@ struct LeastSquares {
   std::function<NormalEquations(bool jacobians)> equations;
   std::function<void(const Eigen::VectorXd& delta)> step;  // x += delta (angles wrapped by the caller)
   std::function<void()> save, restore;                     // the values before a step, and back to them
+  double min_step = 1e-7, min_relative_decrease = 1e-6;    // convergence: see LevenbergMarquardt
 };
 
 struct LmResult {
@@ -30,8 +31,8 @@ struct LmResult {
 // Levenberg-Marquardt on the sparse normal equations H = J^T J (+ priors), g = J^T r: at most
 // max_iterations times, solve (H + lambda diag(H) + ridge I) delta = -g (diag floored at 1e-9),
 // keep the step if the cost falls (lambda / 10, at least 1e-9), else put it back (lambda x 10;
-// give up beyond 1e6); stop once the step's largest entry is below 1e-7 or the cost falls by
-// less than 1e-6 (1 + cost). Lambda starts at 1e-6. The ridge keeps a variable nothing informs
+// give up beyond 1e6); stop once the step's largest entry is below min_step or the cost falls by
+// less than min_relative_decrease (1 + cost). Lambda starts at 1e-6. The ridge keeps a variable nothing informs
 // from making H singular. `solver` keeps the last factorization (for covariances).
 LmResult LevenbergMarquardt(const LeastSquares& problem, int max_iterations, double ridge, Factorization* solver);
 

@@ -1,5 +1,7 @@
 #include "robot_agent/smoother/joint_graph.h"
 
+#include <map>
+
 #include <cmath>
 #include <memory>
 #include <string>
@@ -12,6 +14,7 @@
 #include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
+#include "robot_agent/cooperation/joint_tracker.h"
 #include "world_sim/source/step_source_factory.h"
 
 namespace mrslam::robot_agent::smoother {
@@ -128,6 +131,34 @@ TEST(JointGraph, DoesNotDependOnTheOrderTheOthersAreHeldIn) {
   }
 }
 
+TEST(JointGraph, WarmStartedFromAnEarlierGraphReachesTheSameSolution) {
+  // r1 holds the first 60 steps of each robot, solves, then all 110 and solves again from there.
+  // (A gate so wide that it leaves nothing out: a reading at its edge can fall either way
+  // depending on the way to the solution, and both are fixed points.)
+  const common::ScenarioOptions o = ThreeRobots(4, {"filter.smoother.reading_gate_probability=0.9999999999"});
+  const SimRun run = Simulate(o);
+  SimRun early = run;
+  for (auto& steps : early.steps) steps.resize(60);
+  const auto options = common::AgentOptionsFor(o, "r1");
+  JointGraph before(options, Logs(o, early, {0, 1, 2}));
+  before.Solve();
+  JointGraph warm(options, Logs(o, run, {0, 1, 2}));
+  warm.WarmStart(before);
+  warm.Solve();
+  JointGraph cold(options, Logs(o, run, {0, 1, 2}));
+  cold.Solve();
+  EXPECT_EQ(cold.Outliers(), 0);
+  for (int r = 0; r < 3; ++r) {
+    const auto pw = warm.Path(r), pc = cold.Path(r);
+    ASSERT_EQ(pw.size(), pc.size()) << r;
+    for (std::size_t k = 0; k < pw.size(); ++k) {
+      EXPECT_NEAR(pw[k].second.x, pc[k].second.x, 1e-6) << r << " " << k;
+      EXPECT_NEAR(pw[k].second.y, pc[k].second.y, 1e-6) << r << " " << k;
+      EXPECT_NEAR(common::WrapAngle(pw[k].second.heading - pc[k].second.heading), 0.0, 1e-6) << r << " " << k;
+    }
+  }
+}
+
 TEST(JointGraph, FramesAreConsistentWithTheirCovariances) {
   // The frames of r2 and r3 over seeds: their normalized estimation error squared (3 dof) has a
   // mean of 3 when the covariances are right; over 20 draws it falls in [1.6, 4.8] with 99%.
@@ -178,6 +209,40 @@ TEST(JointGraph, AWrongCorrespondenceDoesNotMoveTheFrames) {
     const Eigen::Vector3d d(fb.x - fa.x, fb.y - fa.y, common::WrapAngle(fb.heading - fa.heading));
     EXPECT_LT(d.dot(a.FrameCovariance(r).inverse() * d), 1.0) << r;
   }
+}
+
+TEST(JointTracker, MovesTheFiltersEstimateOntoTheJointEstimate) {
+  // r1's "filter" is its dead reckoning; every robot's steps reach r1 as they are made. Each
+  // solve (every 5 s, 10 steps) moves the estimate onto the joint graph's, which every robot's
+  // readings correct.
+  const common::ScenarioOptions o = ThreeRobots(5, {"cooperation.share_factors=true", "cooperation.joint_every_s=5"});
+  const SimRun run = Simulate(o);
+  const auto options = common::AgentOptionsFor(o, "r1");
+  ASSERT_TRUE(cooperation::JointTracker::Enabled(options));
+  cooperation::JointTracker tracker(options);
+  std::map<std::string, cooperation::FactorLog> logs;
+  for (int r = 0; r < 3; ++r) logs[o.robots[r].id].first_pose = run.first_poses[r];
+  filters::FilterEstimate estimate;
+  estimate.pose = run.first_poses[0];
+  double dead_reckoning = 0.0, corrected = 0.0;
+  std::uint64_t received = 0;
+  for (int k = 1; k <= o.run.steps; ++k) {
+    for (int r = 0; r < 3; ++r) logs[o.robots[r].id].steps.push_back(run.steps[r][k - 1]);
+    received += 2;
+    for (const auto& s : run.steps[0][k - 1].odometry.segments) {
+      estimate.pose = common::UnicycleStep(estimate.pose, s.v_mps, s.w_radps, s.dt_s);
+    }
+    tracker.AfterStep(k, estimate, logs, received);
+    const common::Pose2 truth = run.truth[0][k];
+    dead_reckoning += (estimate.pose.Translation() - truth.Translation()).squaredNorm();
+    corrected += (tracker.Corrected(estimate).pose.Translation() - truth.Translation()).squaredNorm();
+  }
+  dead_reckoning = std::sqrt(dead_reckoning / o.run.steps);
+  corrected = std::sqrt(corrected / o.run.steps);
+  EXPECT_EQ(tracker.solves(), o.run.steps / 10);
+  EXPECT_LT(corrected, 0.5 * dead_reckoning) << corrected << " against " << dead_reckoning;
+  // The final solve, warm-started, places every robot.
+  EXPECT_TRUE(tracker.Final(logs).not_placed.empty());
 }
 
 }  // namespace
