@@ -524,8 +524,13 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
 }
 
 void Cooperation::Record(const common::SensorStep& step, const filters::FilterEstimate& estimate) {
-  const std::optional<common::SensorStep> labelled = LabelledStep(step, estimate);
-  if (labelled && options_.cooperation.share_factors) exchange_.RecordOwn(*labelled);
+  // The history for the joint transform keeps the own tracks (JointTransform labels by them); the
+  // steps shared are labelled by identity where the sensor reports one.
+  const std::optional<common::SensorStep> labelled = LabelledStep(step, estimate, false);
+  if (options_.cooperation.share_factors) {
+    const auto shared = options_.sensors.lidar.report_identity ? LabelledStep(step, estimate, true) : labelled;
+    if (shared) exchange_.RecordOwn(*shared);
+  }
   const bool fits = labelled && step.lidar.stamp.step == history_.size() + 1 &&
                     history_.size() < static_cast<std::size_t>(options_.cooperation.max_history_steps);
   if (!history_usable_ || !fits) {

@@ -18,8 +18,8 @@ bool Reading(double range_m, double bearing_rad, double time_s) {
 
 }  // namespace
 
-std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step,
-                                               const filters::FilterEstimate& estimate) {
+std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, const filters::FilterEstimate& estimate,
+                                               bool by_identity) {
   if (!estimate.labels_detections || estimate.detection_tracks.size() != step.lidar.landmarks.size()) {
     return std::nullopt;
   }
@@ -29,7 +29,7 @@ std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step,
   kept.odometry = step.odometry;
   for (std::size_t i = 0; i < step.lidar.landmarks.size(); ++i) {
     common::LandmarkDetection d = step.lidar.landmarks[i];
-    if (d.landmark_id >= 0) {
+    if (by_identity && d.landmark_id >= 0) {
       d.landmark_id += 1;  // the identity the sensor reports, the same for every robot
     } else if (estimate.detection_tracks[i] != 0) {
       d.landmark_id = static_cast<int>(estimate.detection_tracks[i]);

@@ -33,12 +33,13 @@ struct FactorLog {
   void Io(common::Archive& ar) { ar(first_pose, steps, fed_by, fed_at); }
 };
 
-// The step as a shared measurement: its odometry, its robot detections and its landmark
+// The step as a measurement to share: its odometry, its robot detections and its landmark
 // detections labelled, the stamp kept; nothing when the filter does not label its detections.
-// A detection's label is its identity + 1 when the sensor reports identities
-// (sensors.lidar.report_identity: every robot's labels then name the same landmarks), else
-// its track in estimate.detection_tracks (the robot's own; the unlabelled left out).
-std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, const filters::FilterEstimate& estimate);
+// A detection's label is its track in estimate.detection_tracks (the robot's own; the unlabelled
+// left out), or with by_identity its identity + 1 when it has one (sensors.lidar.report_identity:
+// every robot's labels then name the same landmarks; the raw measurements shared are so).
+std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, const filters::FilterEstimate& estimate,
+                                               bool by_identity);
 
 // Whether s is a well-formed shared step `step`: that stamp, finite values, a positive range,
 // a track label on every landmark detection, a seen robot named on every robot detection, no

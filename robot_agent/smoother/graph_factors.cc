@@ -7,6 +7,7 @@
 #include <Eigen/LU>
 
 #include "common/angles.h"
+#include "robot_agent/filters/landmark_ekf.h"
 
 namespace mrslam::robot_agent::smoother {
 
@@ -89,6 +90,32 @@ Eigen::Matrix3d OdometryCovariance(const std::vector<std::vector<Motion>>& steps
 }
 
 Eigen::Matrix3d Whitening(const Eigen::Matrix3d& sigma) { return Eigen::Matrix3d(sigma.llt().matrixL()).inverse(); }
+
+Eigen::Vector2d ReadingWeights(const common::LidarOptions& lidar) {
+  const auto weight = [](double sd) { return 1.0 / std::sqrt(std::max(sd * sd, 1e-12)); };
+  return {weight(lidar.range_noise_sd_m), weight(lidar.bearing_noise_sd_rad)};
+}
+
+Eigen::Vector2d WhitenedReading(const Pose2& x, const Eigen::Vector2d& p, double range_m, double bearing_rad,
+                                const Eigen::Vector2d& w) {
+  const common::RangeBearing h = common::MeasureRangeBearing(x, p);
+  return {(range_m - h.range_m) * w(0), WrapAngle(bearing_rad - h.bearing_rad) * w(1)};
+}
+
+ReadingFactor RobustReading(const Pose2& x, const Eigen::Vector2d& p, double range_m, double bearing_rad,
+                            const Eigen::Vector2d& w, double k, bool jacobians) {
+  ReadingFactor out;
+  const Eigen::Vector2d r = WhitenedReading(x, p, range_m, bearing_rad, w);
+  const Huber huber = HuberLoss(r.norm(), k);
+  out.cost = huber.cost;
+  out.residual = huber.scale * r;
+  if (jacobians) {
+    const Eigen::Matrix2d scaled = huber.scale * w.asDiagonal();
+    out.d_pose = -scaled * filters::MeasurementJacobianPose(p, x);
+    out.d_point = -scaled * filters::MeasurementJacobianLandmark(p, x);
+  }
+  return out;
+}
 
 Huber HuberLoss(double s, double k) {
   if (s <= k) return {1.0, s * s};

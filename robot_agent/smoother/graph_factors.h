@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 
 #include "common/se2.h"
+#include "common/sensor_options.h"
 #include "robot_agent/filters/odometry_calibration.h"
 
 // The maths the factor graphs share (KeyframeGraph, JointGraph): the odometry increment between
@@ -50,6 +51,23 @@ Eigen::Matrix3d OdometryCovariance(const std::vector<std::vector<Motion>>& steps
                                    const Eigen::Vector3d& var);
 // L^-1 with Sigma = L L^T: whitens a residual of covariance Sigma.
 Eigen::Matrix3d Whitening(const Eigen::Matrix3d& sigma);
+
+// A range-bearing reading z = (range, bearing) of the point p from the pose x, whitened:
+// r = W (z - h(x, p)), bearing wrapped, W = diag(w) (ReadingWeights: 1 / sd per component).
+Eigen::Vector2d ReadingWeights(const common::LidarOptions& lidar);
+Eigen::Vector2d WhitenedReading(const common::Pose2& x, const Eigen::Vector2d& p, double range_m, double bearing_rad,
+                                const Eigen::Vector2d& w);
+// The reading's factor under the Huber loss of width k (HuberLoss): its residual scaled by the
+// loss's weight, the loss it adds to the cost and, with jacobians, its Jacobians with respect to
+// x and to p.
+struct ReadingFactor {
+  Eigen::Vector2d residual;
+  double cost = 0.0;
+  Eigen::Matrix<double, 2, 3> d_pose;
+  Eigen::Matrix2d d_point;
+};
+ReadingFactor RobustReading(const common::Pose2& x, const Eigen::Vector2d& p, double range_m, double bearing_rad,
+                            const Eigen::Vector2d& w, double k, bool jacobians);
 
 // The Huber loss of width k on a whitened residual block of norm s: the factor that scales the
 // block (1 within k, sqrt(k / s) beyond, iteratively reweighted) and the loss it adds to the cost.

@@ -9,7 +9,6 @@
 
 #include "common/angles.h"
 #include "common/gaussian.h"
-#include "robot_agent/filters/landmark_ekf.h"
 #include "robot_agent/filters/odometry_calibration.h"
 
 namespace mrslam::robot_agent::smoother {
@@ -17,8 +16,6 @@ namespace {
 
 using common::Pose2;
 using common::WrapAngle;
-
-double Sd(double var) { return std::sqrt(std::max(var, 1e-12)); }
 
 int IndexOf(const std::vector<JointGraph::RobotLog>& logs, const std::string& id) {
   for (std::size_t i = 0; i < logs.size(); ++i) {
@@ -40,8 +37,7 @@ JointGraph::JointGraph(const AgentOptions& options, const std::vector<RobotLog>&
       robot_var_(options.noise.robot_process_var),
       prior_w_(1.0 / options.filter.smoother.speed_factor_sd, 1.0 / options.filter.smoother.turn_factor_sd,
                1.0 / options.filter.smoother.turn_bias_sd_radps),
-      z_w_(1.0 / Sd(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
-           1.0 / Sd(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad)),
+      z_w_(ReadingWeights(options.sensors.lidar)),
       options_(options) {
   if (robots.empty()) throw std::invalid_argument("the joint graph needs the agent's own robot");
   for (const auto& log : robots) {
@@ -253,11 +249,6 @@ Eigen::Vector2d JointGraph::Target(const Observation& o, int step) const {
   return seen.keyframes[seen.keyframe_at.at(step)].pose.Translation();
 }
 
-Eigen::Vector2d JointGraph::WhitenedResidual(const Pose2& x, const Eigen::Vector2d& p, const Observation& o) const {
-  const common::RangeBearing h = common::MeasureRangeBearing(x, p);
-  return {(o.range_m - h.range_m) * z_w_(0), WrapAngle(o.bearing_rad - h.bearing_rad) * z_w_(1)};
-}
-
 void JointGraph::AddOdometryRows(int r, NormalEquations* rows) const {
   const Robot& robot = robots_[r];
   for (int k = 1; k < robot.active; ++k) {
@@ -279,17 +270,14 @@ void JointGraph::AddObservationRows(int r, NormalEquations* rows) const {
     for (const Observation& o : kf.observations) {
       if (!o.inlier || !TargetActive(o, kf.step)) continue;
       const Eigen::Vector2d p = Target(o, kf.step);
-      Eigen::Vector2d res = WhitenedResidual(kf.pose, p, o);
-      const Huber huber = HuberLoss(res.norm(), huber_k_);
-      rows->cost += huber.cost;
+      const ReadingFactor f = RobustReading(kf.pose, p, o.range_m, o.bearing_rad, z_w_, huber_k_, rows->jacobians);
+      rows->cost += f.cost;
       if (!rows->jacobians) continue;
-      res *= huber.scale;
-      const Eigen::Matrix2d w = huber.scale * z_w_.asDiagonal();
       const int target_col =
           o.landmark >= 0 ? landmark_col_[o.landmark] : PoseCol(o.seen, robots_[o.seen].keyframe_at.at(kf.step));
       NormalEquations::Block jt = NormalEquations::Block::Zero(2, o.landmark >= 0 ? 2 : 3);
-      jt.leftCols<2>() = -w * filters::MeasurementJacobianLandmark(p, kf.pose);
-      rows->Add(res, {{PoseCol(r, k), -w * filters::MeasurementJacobianPose(p, kf.pose)}, {target_col, jt}});
+      jt.leftCols<2>() = f.d_point;
+      rows->Add(f.residual, {{PoseCol(r, k), f.d_pose}, {target_col, jt}});
     }
   }
 }
@@ -336,7 +324,8 @@ bool JointGraph::UpdateInliers() {
       Keyframe& kf = robot.keyframes[k];
       for (Observation& o : kf.observations) {
         if (!TargetActive(o, kf.step)) continue;
-        const bool inlier = WhitenedResidual(kf.pose, Target(o, kf.step), o).squaredNorm() <= gate_;
+        const bool inlier =
+            WhitenedReading(kf.pose, Target(o, kf.step), o.range_m, o.bearing_rad, z_w_).squaredNorm() <= gate_;
         changed = changed || inlier != o.inlier;
         o.inlier = inlier;
       }

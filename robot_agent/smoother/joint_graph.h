@@ -135,7 +135,6 @@ class JointGraph {
   void AddObservationRows(int r, NormalEquations* rows) const;
   void AddCorrectionPrior(int r, NormalEquations* rows) const;
   Eigen::Vector2d Target(const Observation& o, int step) const;
-  Eigen::Vector2d WhitenedResidual(const common::Pose2& x, const Eigen::Vector2d& p, const Observation& o) const;
   void Step(const Eigen::VectorXd& delta);
   bool UpdateInliers();
   int CountReadings(bool only_outliers) const;

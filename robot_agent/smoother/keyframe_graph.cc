@@ -25,8 +25,6 @@ namespace {
 using common::Pose2;
 using common::WrapAngle;
 
-double Sd(double var) { return std::sqrt(std::max(var, 1e-12)); }
-
 }  // namespace
 
 KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
@@ -37,8 +35,7 @@ KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
       gate_(common::ChiSquare2Quantile(options.filter.smoother.reading_gate_probability)),
       robot_var_(options.noise.robot_process_var),
       landmark_var_(options.noise.landmark_process_var),
-      z_w_(1.0 / Sd(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
-           1.0 / Sd(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad)) {
+      z_w_(ReadingWeights(options.sensors.lidar)) {
   Keyframe first;
   first.pose = start;
   first.fixed = true;
@@ -266,11 +263,6 @@ void KeyframeGraph::StartLandmarks() {
   }
 }
 
-Eigen::Vector2d KeyframeGraph::WhitenedResidual(const Pose2& x, const Eigen::Vector2d& p, const Reading& z) const {
-  const common::RangeBearing h = common::MeasureRangeBearing(x, p);
-  return {(z.range_m - h.range_m) * z_w_(0), WrapAngle(z.bearing_rad - h.bearing_rad) * z_w_(1)};
-}
-
 void KeyframeGraph::AddOdometryRows(const Layout& layout, const Keyframe& previous, const Keyframe& kf,
                                     Rows* rows) const {
   const OdometryFactor f =
@@ -293,16 +285,13 @@ void KeyframeGraph::AddReadingRows(const Layout& layout, const Keyframe& kf, Row
     const int p_col = layout.Col(target);
     if (p_col < 0) continue;
     const Eigen::Vector2d p = mover ? movers_.at(target.key).Translation() : landmarks_.at(stored.z.track);
-    Eigen::Vector2d r = WhitenedResidual(kf.pose, p, stored.z);
-    const double s = r.norm();
-    const Huber huber = HuberLoss(s, huber_k_);
-    const double scale = huber.scale;
-    rows->cost += huber.cost;
-    r *= scale;
-    const Eigen::Matrix2d w = scale * z_w_.asDiagonal();
+    const ReadingFactor f =
+        RobustReading(kf.pose, p, stored.z.range_m, stored.z.bearing_rad, z_w_, huber_k_, rows->jacobians);
+    rows->cost += f.cost;
+    if (!rows->jacobians) continue;
     Rows::Block jp = Rows::Block::Zero(2, Dim(target));
-    jp.leftCols<2>() = -w * filters::MeasurementJacobianLandmark(p, kf.pose);
-    rows->Add(r, {{x_col, -w * filters::MeasurementJacobianPose(p, kf.pose)}, {p_col, jp}});
+    jp.leftCols<2>() = f.d_point;
+    rows->Add(f.residual, {{x_col, f.d_pose}, {p_col, jp}});
   }
 }
 
@@ -419,7 +408,7 @@ bool KeyframeGraph::UpdateInliers() {
       } else {
         continue;
       }
-      const bool inlier = WhitenedResidual(kf.pose, p, r.z).squaredNorm() <= gate_;
+      const bool inlier = WhitenedReading(kf.pose, p, r.z.range_m, r.z.bearing_rad, z_w_).squaredNorm() <= gate_;
       changed = changed || inlier != r.inlier;
       r.inlier = inlier;
     }

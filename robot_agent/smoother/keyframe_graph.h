@@ -239,7 +239,6 @@ class KeyframeGraph {
   void AddOdometryRows(const Layout& layout, const Keyframe& previous, const Keyframe& kf, Rows* rows) const;
   void AddReadingRows(const Layout& layout, const Keyframe& kf, Rows* rows) const;
   void AddMoverRows(const Layout& layout, std::uint32_t track, int from_step, int to_step, Rows* rows) const;
-  Eigen::Vector2d WhitenedResidual(const common::Pose2& x, const Eigen::Vector2d& p, const Reading& z) const;
   // The prior's terms: H_p at the layout's columns, its gradient at the current values, its cost.
   void AddPrior(const Layout& layout, Rows* rows) const;
   Rows Equations(const Layout& layout, bool only_oldest, bool jacobians) const;
