@@ -35,10 +35,11 @@ struct SmootherOptions {
   double huber_k = 3.0;                      // the Huber loss's width on a reading's whitened residual norm
   double reading_gate_probability = 0.9999;  // chi-square 2 dof gate of a reading at the solution
   // Prior standard deviations of the odometry correction: speed factor, turn-rate factor,
-  // turn-rate bias (rad/s), about (1, 1, 0).
-  double speed_factor_sd = 0.1;
-  double turn_factor_sd = 0.1;
-  double turn_bias_sd_radps = 0.05;
+  // turn-rate bias (rad/s), about (1, 1, 0). The defaults say the configured calibration is
+  // known well, as in simulation; a real robot's scenario states how well it knows its own.
+  double speed_factor_sd = 0.003;
+  double turn_factor_sd = 0.003;
+  double turn_bias_sd_radps = 0.0015;
   // Lost: this many keyframes in a row with at least min_recovery_readings readings of which at
   // most half fit the map; then the pose is searched again among the mapped landmarks.
   int lost_after_keyframes = 3;
