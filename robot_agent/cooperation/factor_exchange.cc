@@ -41,6 +41,33 @@ std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, c
   return kept;
 }
 
+std::int32_t TimeOffsetUs(double time_s, double step_time_s) {
+  const double us = std::round((time_s - step_time_s) * 1e6);
+  if (!std::isfinite(us)) return 0;
+  return static_cast<std::int32_t>(std::clamp(us, -double{kMaxTimeOffsetUs}, double{kMaxTimeOffsetUs}));
+}
+
+double OffsetTime(double step_time_s, std::int32_t offset_us) { return step_time_s + offset_us * 1e-6; }
+
+common::SensorStep SharedPrecision(common::SensorStep step) {
+  const double t0 = step.lidar.stamp.time_s;
+  const auto single = [](double x) { return static_cast<double>(static_cast<float>(x)); };
+  const auto offset = [&](double t) { return OffsetTime(t0, TimeOffsetUs(t, t0)); };
+  step.odometry.stamp = step.lidar.stamp;
+  for (auto& o : step.odometry.segments) o = {offset(o.time_s), single(o.dt_s), single(o.v_mps), single(o.w_radps)};
+  for (auto& d : step.lidar.landmarks) {
+    d.time_s = offset(d.time_s);
+    d.range_m = single(d.range_m);
+    d.bearing_rad = single(d.bearing_rad);
+  }
+  for (auto& d : step.lidar.robots) {
+    d.time_s = offset(d.time_s);
+    d.range_m = single(d.range_m);
+    d.bearing_rad = single(d.bearing_rad);
+  }
+  return step;
+}
+
 bool SharedStepValid(const common::SensorStep& s, std::uint32_t step) {
   if (s.lidar.stamp.step != step || !std::isfinite(s.lidar.stamp.time_s)) return false;
   if (s.odometry.segments.size() > kMaxItems || s.lidar.landmarks.size() > kMaxItems ||
@@ -90,7 +117,7 @@ void FactorExchange::RecordOwn(const common::SensorStep& labelled) {
     own_growing_ = false;
     return;
   }
-  own.steps.push_back(labelled);
+  own.steps.push_back(SharedPrecision(labelled));
   if (static_cast<int>(k) < options_.rendezvous.enable_from_step) return;
   for (const auto& d : labelled.lidar.robots) {
     if (d.seen_robot_id != self_ && options_.TeamIndex(d.seen_robot_id) >= 0) detected_at_[d.seen_robot_id] = k;

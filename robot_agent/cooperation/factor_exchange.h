@@ -41,6 +41,16 @@ struct FactorLog {
 std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, const filters::FilterEstimate& estimate,
                                                bool by_identity);
 
+// The step in the precision it is shared in (docs/cooperation.md, "Message sizes"): one stamp
+// (the odometry's is the scan's); each time the step's time plus a whole number of microseconds
+// (TimeOffsetUs, within +-kMaxTimeOffsetUs); each value rounded to single precision (about 1e-7
+// relative, far below any sensor's noise). The own log holds this form, so every agent's graph
+// sees the origin's numbers to the bit. Idempotent.
+constexpr std::int32_t kMaxTimeOffsetUs = 1'000'000'000;
+std::int32_t TimeOffsetUs(double time_s, double step_time_s);
+double OffsetTime(double step_time_s, std::int32_t offset_us);
+common::SensorStep SharedPrecision(common::SensorStep step);
+
 // Whether s is a well-formed shared step `step`: that stamp, finite values, a positive range,
 // a track label on every landmark detection, a seen robot named on every robot detection, no
 // IMU, at most 256 items per kind.
@@ -77,7 +87,8 @@ class FactorExchange {
 
   explicit FactorExchange(const AgentOptions& options);
 
-  // The own step k (LabelledStep) goes into the own log; its robot detections open the window
+  // The own step k (LabelledStep) goes into the own log, in SharedPrecision; its robot
+  // detections open the window
   // to those peers. A step that does not follow the last one ends the own log's growth (a gap
   // cannot be shared).
   void RecordOwn(const common::SensorStep& labelled);

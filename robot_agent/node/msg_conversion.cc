@@ -1,6 +1,7 @@
 #include "robot_agent/node/msg_conversion.h"
 
 #include "common/dds/msg_conversion.h"
+#include "robot_agent/cooperation/factor_exchange.h"
 
 namespace mrslam::robot_agent {
 namespace {
@@ -15,6 +16,57 @@ common::SensorStep FromHistoryStep(const msg::HistoryStep& h) {
   common::SensorStep step;
   step.lidar = dds::FromMsg(h.lidar());
   step.odometry = dds::FromMsg(h.odometry());
+  return step;
+}
+
+// A step in its shared form (cooperation::SharedPrecision) and back: exact both ways.
+msg::SharedStep ToSharedStep(const common::SensorStep& step) {
+  const double t0 = step.lidar.stamp.time_s;
+  msg::SharedStep m;
+  m.time_s(t0);
+  for (const auto& o : step.odometry.segments) {
+    msg::SharedSegment s;
+    s.time_offset_us(cooperation::TimeOffsetUs(o.time_s, t0));
+    s.dt_s(static_cast<float>(o.dt_s));
+    s.v_mps(static_cast<float>(o.v_mps));
+    s.w_radps(static_cast<float>(o.w_radps));
+    m.odometry().push_back(s);
+  }
+  for (const auto& d : step.lidar.landmarks) {
+    msg::SharedLandmarkReading r;
+    r.time_offset_us(cooperation::TimeOffsetUs(d.time_s, t0));
+    r.range_m(static_cast<float>(d.range_m));
+    r.bearing_rad(static_cast<float>(d.bearing_rad));
+    r.label(d.landmark_id);
+    m.landmarks().push_back(r);
+  }
+  for (const auto& d : step.lidar.robots) {
+    msg::SharedRobotReading r;
+    r.time_offset_us(cooperation::TimeOffsetUs(d.time_s, t0));
+    r.range_m(static_cast<float>(d.range_m));
+    r.bearing_rad(static_cast<float>(d.bearing_rad));
+    r.seen_robot_id(d.seen_robot_id);
+    m.robots().push_back(std::move(r));
+  }
+  return m;
+}
+common::SensorStep FromSharedStep(const msg::SharedStep& m, const std::string& origin, std::uint32_t step_number) {
+  const double t0 = m.time_s();
+  common::SensorStep step;
+  step.lidar.stamp = {origin, step_number, t0};
+  step.odometry.stamp = step.lidar.stamp;
+  for (const auto& o : m.odometry()) {
+    step.odometry.segments.push_back(
+        {cooperation::OffsetTime(t0, o.time_offset_us()), o.dt_s(), o.v_mps(), o.w_radps()});
+  }
+  for (const auto& d : m.landmarks()) {
+    step.lidar.landmarks.push_back(
+        {cooperation::OffsetTime(t0, d.time_offset_us()), d.range_m(), d.bearing_rad(), d.label()});
+  }
+  for (const auto& d : m.robots()) {
+    step.lidar.robots.push_back(
+        {cooperation::OffsetTime(t0, d.time_offset_us()), d.range_m(), d.bearing_rad(), d.seen_robot_id()});
+  }
   return step;
 }
 
@@ -148,10 +200,10 @@ msg::FactorBatch ToMsg(const cooperation::FactorBatch& b) {
     mr.origin_id(r.origin);
     mr.first_step(r.first_step);
     mr.first_pose(dds::ToMsg(r.first_pose));
-    for (const auto& step : r.steps) mr.steps().push_back(ToHistoryStep(step));
+    for (const auto& step : r.steps) mr.steps().push_back(ToSharedStep(step));
     m.runs().push_back(std::move(mr));
   }
-  for (const auto& step : b.opening) m.opening().push_back(ToHistoryStep(step));
+  for (const auto& step : b.opening) m.opening().push_back(ToSharedStep(step));
   return m;
 }
 cooperation::FactorBatch FromMsg(const msg::FactorBatch& m) {
@@ -161,10 +213,12 @@ cooperation::FactorBatch FromMsg(const msg::FactorBatch& m) {
   for (const auto& h : m.holdings()) b.holdings.push_back({h.origin_id(), h.steps(), h.fed_by(), h.fed_at()});
   for (const auto& mr : m.runs()) {
     cooperation::FactorRun r{mr.origin_id(), mr.first_step(), dds::FromMsg(mr.first_pose()), {}};
-    for (const auto& h : mr.steps()) r.steps.push_back(FromHistoryStep(h));
+    for (const auto& h : mr.steps()) {
+      r.steps.push_back(FromSharedStep(h, r.origin, r.first_step + static_cast<std::uint32_t>(r.steps.size())));
+    }
     b.runs.push_back(std::move(r));
   }
-  for (const auto& h : m.opening()) b.opening.push_back(FromHistoryStep(h));
+  for (const auto& h : m.opening()) b.opening.push_back(FromSharedStep(h, b.header.sender, b.opened_by_step));
   return b;
 }
 

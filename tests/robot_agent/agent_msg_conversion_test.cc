@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "robot_agent/cooperation/factor_exchange.h"
+
 namespace mrslam::robot_agent {
 namespace {
 
@@ -129,6 +131,73 @@ TEST(AgentMsgConversionTest, PeerMessagesRoundTrip) {
   EXPECT_EQ(nb.landmark_id, 12);
   EXPECT_EQ(nb.position_in_sender, n.position_in_sender);
   EXPECT_EQ(nb.header.sequence, 7U);
+}
+
+void ExpectBitEqual(const common::SensorStep& a, const common::SensorStep& b) {
+  EXPECT_EQ(a.lidar.stamp.robot_id, b.lidar.stamp.robot_id);
+  EXPECT_EQ(a.lidar.stamp.step, b.lidar.stamp.step);
+  EXPECT_EQ(a.lidar.stamp.time_s, b.lidar.stamp.time_s);
+  EXPECT_EQ(a.odometry.stamp.time_s, b.odometry.stamp.time_s);
+  ASSERT_EQ(a.odometry.segments.size(), b.odometry.segments.size());
+  for (std::size_t i = 0; i < a.odometry.segments.size(); ++i) {
+    const auto &x = a.odometry.segments[i], &y = b.odometry.segments[i];
+    EXPECT_EQ(x.time_s, y.time_s);
+    EXPECT_EQ(x.dt_s, y.dt_s);
+    EXPECT_EQ(x.v_mps, y.v_mps);
+    EXPECT_EQ(x.w_radps, y.w_radps);
+  }
+  ASSERT_EQ(a.lidar.landmarks.size(), b.lidar.landmarks.size());
+  for (std::size_t i = 0; i < a.lidar.landmarks.size(); ++i) {
+    const auto &x = a.lidar.landmarks[i], &y = b.lidar.landmarks[i];
+    EXPECT_EQ(x.time_s, y.time_s);
+    EXPECT_EQ(x.range_m, y.range_m);
+    EXPECT_EQ(x.bearing_rad, y.bearing_rad);
+    EXPECT_EQ(x.landmark_id, y.landmark_id);
+  }
+  ASSERT_EQ(a.lidar.robots.size(), b.lidar.robots.size());
+  for (std::size_t i = 0; i < a.lidar.robots.size(); ++i) {
+    const auto &x = a.lidar.robots[i], &y = b.lidar.robots[i];
+    EXPECT_EQ(x.time_s, y.time_s);
+    EXPECT_EQ(x.range_m, y.range_m);
+    EXPECT_EQ(x.bearing_rad, y.bearing_rad);
+    EXPECT_EQ(x.seen_robot_id, y.seen_robot_id);
+  }
+}
+
+TEST(AgentMsgConversionTest, SharedStepsArriveAsTheOriginHoldsThem) {
+  // Steps with times late in a long run, irregular offsets and values that single precision
+  // rounds: in their shared form (the origin's own log) they travel to the bit, in a run and as
+  // the opening step.
+  cooperation::FactorBatch b;
+  b.header = {"r3", "r1", 9001, 900.1, 4};
+  b.opened_by_step = 9001;
+  cooperation::FactorRun run{"r3", 8999, {0.1, -0.2, 0.3}, {}};
+  for (std::uint32_t k = 8999; k <= 9001; ++k) {
+    common::SensorStep step;
+    const double t = 0.1 * k + 1e-9 * k;
+    step.lidar.stamp = {"r3", k, t};
+    step.odometry.stamp = {"r3", k, t - 0.05};  // not the scan's: the shared form has one stamp
+    step.odometry.segments.push_back({t - 0.2 - 1.0 / 3e4, 0.0151234567, 0.312345678901, -0.0998765432101});
+    step.odometry.segments.push_back({t - 0.1849, 0.0848765, 0.3 + 1e-12, 0.1 / 3.0});
+    step.lidar.landmarks.push_back({t + 1.0 / 7e3, 2.123456789012, -0.3 / 7.0, 12});
+    step.lidar.robots.push_back({t - 1e-3 / 3.0, 4.0 / 3.0, 0.1 / 9.0, "r1"});
+    const common::SensorStep shared = cooperation::SharedPrecision(step);
+    ExpectBitEqual(cooperation::SharedPrecision(shared), shared);
+    EXPECT_NE(shared.odometry.segments[0].v_mps, step.odometry.segments[0].v_mps);  // rounded
+    EXPECT_NEAR(shared.odometry.segments[0].v_mps, step.odometry.segments[0].v_mps, 1e-7);
+    EXPECT_NEAR(shared.odometry.segments[0].time_s, step.odometry.segments[0].time_s, 5e-7);
+    run.steps.push_back(shared);
+  }
+  b.runs.push_back(run);
+  b.opening.push_back(run.steps.back());
+  const auto back = FromMsg(ToMsg(b));
+  ASSERT_EQ(back.runs.size(), 1U);
+  EXPECT_EQ(back.runs[0].origin, "r3");
+  EXPECT_EQ(back.runs[0].first_step, 8999U);
+  ASSERT_EQ(back.runs[0].steps.size(), 3U);
+  for (std::size_t i = 0; i < 3; ++i) ExpectBitEqual(back.runs[0].steps[i], run.steps[i]);
+  ASSERT_EQ(back.opening.size(), 1U);
+  ExpectBitEqual(back.opening[0], run.steps.back());
 }
 
 }  // namespace
