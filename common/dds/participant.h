@@ -181,11 +181,13 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   Reader& operator=(const Reader&) = delete;
 
   // Takes the oldest queued sample (and, if asked, the participant that wrote it and when it was
-  // written and received); waits up to timeout. False on timeout.
+  // written and received); waits up to timeout (0: does not wait, nor enter the kernel). False on
+  // timeout.
   bool Take(Msg* out, std::chrono::milliseconds timeout, common::WriterId* writer = nullptr,
             SampleTimes* times = nullptr) {
     std::unique_lock<std::mutex> lock(mutex_);
-    if (!cv_.wait_for(lock, timeout, [this] { return !queue_.empty(); })) return false;
+    const auto ready = [this] { return !queue_.empty(); };
+    if (timeout.count() == 0 ? !ready() : !cv_.wait_for(lock, timeout, ready)) return false;
     Received& front = queue_.front();
     *out = std::move(front.msg);
     if (writer != nullptr) *writer = front.writer;
