@@ -19,6 +19,16 @@ common::SensorStep FromHistoryStep(const msg::HistoryStep& h) {
   return step;
 }
 
+// A reading's time, range and bearing in their shared form.
+template <typename M, typename D>
+M SharedReading(const D& d, double step_time_s) {
+  M m;
+  m.time_offset_us(cooperation::TimeOffsetUs(d.time_s, step_time_s));
+  m.range_m(static_cast<float>(d.range_m));
+  m.bearing_rad(static_cast<float>(d.bearing_rad));
+  return m;
+}
+
 // A step in its shared form (cooperation::SharedPrecision) and back: exact both ways.
 msg::SharedStep ToSharedStep(const common::SensorStep& step) {
   const double t0 = step.lidar.stamp.time_s;
@@ -33,18 +43,12 @@ msg::SharedStep ToSharedStep(const common::SensorStep& step) {
     m.odometry().push_back(s);
   }
   for (const auto& d : step.lidar.landmarks) {
-    msg::SharedLandmarkReading r;
-    r.time_offset_us(cooperation::TimeOffsetUs(d.time_s, t0));
-    r.range_m(static_cast<float>(d.range_m));
-    r.bearing_rad(static_cast<float>(d.bearing_rad));
+    auto r = SharedReading<msg::SharedLandmarkReading>(d, t0);
     r.label(d.landmark_id);
     m.landmarks().push_back(r);
   }
   for (const auto& d : step.lidar.robots) {
-    msg::SharedRobotReading r;
-    r.time_offset_us(cooperation::TimeOffsetUs(d.time_s, t0));
-    r.range_m(static_cast<float>(d.range_m));
-    r.bearing_rad(static_cast<float>(d.bearing_rad));
+    auto r = SharedReading<msg::SharedRobotReading>(d, t0);
     r.seen_robot_id(d.seen_robot_id);
     m.robots().push_back(std::move(r));
   }

@@ -133,6 +133,13 @@ TEST(AgentMsgConversionTest, PeerMessagesRoundTrip) {
   EXPECT_EQ(nb.header.sequence, 7U);
 }
 
+template <typename D>
+void ExpectSameReading(const D& x, const D& y) {
+  EXPECT_EQ(x.time_s, y.time_s);
+  EXPECT_EQ(x.range_m, y.range_m);
+  EXPECT_EQ(x.bearing_rad, y.bearing_rad);
+}
+
 void ExpectBitEqual(const common::SensorStep& a, const common::SensorStep& b) {
   EXPECT_EQ(a.lidar.stamp.robot_id, b.lidar.stamp.robot_id);
   EXPECT_EQ(a.lidar.stamp.step, b.lidar.stamp.step);
@@ -148,19 +155,13 @@ void ExpectBitEqual(const common::SensorStep& a, const common::SensorStep& b) {
   }
   ASSERT_EQ(a.lidar.landmarks.size(), b.lidar.landmarks.size());
   for (std::size_t i = 0; i < a.lidar.landmarks.size(); ++i) {
-    const auto &x = a.lidar.landmarks[i], &y = b.lidar.landmarks[i];
-    EXPECT_EQ(x.time_s, y.time_s);
-    EXPECT_EQ(x.range_m, y.range_m);
-    EXPECT_EQ(x.bearing_rad, y.bearing_rad);
-    EXPECT_EQ(x.landmark_id, y.landmark_id);
+    ExpectSameReading(a.lidar.landmarks[i], b.lidar.landmarks[i]);
+    EXPECT_EQ(a.lidar.landmarks[i].landmark_id, b.lidar.landmarks[i].landmark_id);
   }
   ASSERT_EQ(a.lidar.robots.size(), b.lidar.robots.size());
   for (std::size_t i = 0; i < a.lidar.robots.size(); ++i) {
-    const auto &x = a.lidar.robots[i], &y = b.lidar.robots[i];
-    EXPECT_EQ(x.time_s, y.time_s);
-    EXPECT_EQ(x.range_m, y.range_m);
-    EXPECT_EQ(x.bearing_rad, y.bearing_rad);
-    EXPECT_EQ(x.seen_robot_id, y.seen_robot_id);
+    ExpectSameReading(a.lidar.robots[i], b.lidar.robots[i]);
+    EXPECT_EQ(a.lidar.robots[i].seen_robot_id, b.lidar.robots[i].seen_robot_id);
   }
 }
 
