@@ -55,16 +55,13 @@ common::SensorStep SharedPrecision(common::SensorStep step) {
   const auto offset = [&](double t) { return OffsetTime(t0, TimeOffsetUs(t, t0)); };
   step.odometry.stamp = step.lidar.stamp;
   for (auto& o : step.odometry.segments) o = {offset(o.time_s), single(o.dt_s), single(o.v_mps), single(o.w_radps)};
-  for (auto& d : step.lidar.landmarks) {
+  const auto reading = [&](auto& d) {
     d.time_s = offset(d.time_s);
     d.range_m = single(d.range_m);
     d.bearing_rad = single(d.bearing_rad);
-  }
-  for (auto& d : step.lidar.robots) {
-    d.time_s = offset(d.time_s);
-    d.range_m = single(d.range_m);
-    d.bearing_rad = single(d.bearing_rad);
-  }
+  };
+  for (auto& d : step.lidar.landmarks) reading(d);
+  for (auto& d : step.lidar.robots) reading(d);
   return step;
 }
 

@@ -41,7 +41,7 @@ struct FactorLog {
 std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, const filters::FilterEstimate& estimate,
                                                bool by_identity);
 
-// The step in the precision it is shared in (docs/cooperation.md, "Message sizes"): one stamp
+// The step in the precision it is shared in (docs/cooperation.md, "Size and precision"): one stamp
 // (the odometry's is the scan's); each time the step's time plus a whole number of microseconds
 // (TimeOffsetUs, within +-kMaxTimeOffsetUs); each value rounded to single precision (about 1e-7
 // relative, far below any sensor's noise). The own log holds this form, so every agent's graph
@@ -88,9 +88,8 @@ class FactorExchange {
   explicit FactorExchange(const AgentOptions& options);
 
   // The own step k (LabelledStep) goes into the own log, in SharedPrecision; its robot
-  // detections open the window
-  // to those peers. A step that does not follow the last one ends the own log's growth (a gap
-  // cannot be shared).
+  // detections open the window to those peers. A step that does not follow the last one ends
+  // the own log's growth (a gap cannot be shared).
   void RecordOwn(const common::SensorStep& labelled);
   // The batches to send after step k (header: sender, recipient, k, time_s; sequence 0).
   std::vector<FactorBatch> Outgoing(std::uint32_t k, double time_s);
