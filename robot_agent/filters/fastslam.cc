@@ -338,6 +338,7 @@ void FastSlam<D>::AssociateDetections(int p, const std::vector<Detection>& detec
   d2_.resize(particle.blocks.size() * kLanes);
   used_.assign(particle.count, 0);
   matches_.clear();
+  gated_.clear();
   creations_.clear();
   for (const Detection& det : detections) {
     const auto [slot, kind] = Associate(particle, det, *proposal);
@@ -396,11 +397,13 @@ void FastSlam<D>::WeighMatch(int p, const Detection& det, int slot, AssociationK
   if (det.landmark_id >= 0 && filter_.outlier_gate_probability < 1.0) {
     // Outlier gate for identified detections (filter.outlier_gate_probability): beyond the
     // chi-square 2 dof gate d2_max = -2 ln(1 - p) a reading is an outlier (a wrong range):
-    // its likelihood is capped at the gate and it updates nothing.
+    // its likelihood is capped at the gate and it updates nothing. It keeps its landmark's
+    // label: a smoother fed by the labels decides by its own gate, at its own estimate.
     const double d2_max = -2.0 * std::log(1.0 - filter_.outlier_gate_probability);
     const double d2 = nu.dot(s.ldlt().solve(nu));
     if (d2 > d2_max) {
       log_weights_[p] += -0.5 * d2_max - std::log(2.0 * kPi) - 0.5 * std::log(s.determinant());
+      if (kind != AssociationKind::kIgnored) gated_.push_back({slot, det.index});
       return;
     }
   }
@@ -457,6 +460,9 @@ void FastSlam<D>::UpdateLandmarks(int p, const std::vector<Detection>& detection
     meta.misses = 0;
     meta.last_seen_step = step_;
     labels[match.detection] = meta.track_id;
+  }
+  for (const Match& gated : gated_) {
+    labels[gated.detection] = particle.blocks[gated.slot / kLanes]->meta[gated.slot % kLanes].track_id;
   }
   for (const int i : creations_) {
     CreateLandmark(&particle, pose, detections[i]);

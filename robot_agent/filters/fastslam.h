@@ -168,7 +168,7 @@ class FastSlam : public SlamFilter {
   // Step 1: the motion prior (FastSLAM 1.0: the pose sampled from it at once).
   PoseProposal MotionPrior(const Particle& particle, const std::vector<Segment>& segments, const Eigen::Vector3d& var);
   // Steps 3-4: associates each detection, weighs particle p by the readings' likelihood and
-  // refines the proposal; fills matches_ and creations_.
+  // refines the proposal; fills matches_, gated_ and creations_.
   void AssociateDetections(int p, const std::vector<Detection>& detections, PoseProposal* proposal);
   // A detection's landmark slot in the particle (-1 for none) and what to do with it.
   std::pair<int, AssociationKind> Associate(const Particle& particle, const Detection& det,
@@ -278,6 +278,7 @@ class FastSlam : public SlamFilter {
   std::vector<double> d2_;
   std::vector<std::uint8_t> used_;
   std::vector<Match> matches_;
+  std::vector<Match> gated_;  // identified detections beyond the outlier gate: labelled, unused
   std::vector<int> creations_;
 };
 

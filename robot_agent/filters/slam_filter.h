@@ -60,7 +60,9 @@ struct FilterEstimate {
   std::vector<MapLandmark> landmarks;
   // Whether the filter labels the detections (fastslam; not ekf, ekf_ela), and then per landmark
   // detection of the step's scan, in the scan's order, the track its most probable hypothesis
-  // associated it with or created from it (0: none, e.g. ignored or invalid).
+  // associated it with or created from it (0: none, e.g. ignored or invalid); an identified
+  // detection beyond filter.outlier_gate_probability's gate, which the filter leaves out, keeps
+  // its landmark's track.
   bool labels_detections = false;
   std::vector<std::uint32_t> detection_tracks;
 };

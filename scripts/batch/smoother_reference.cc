@@ -35,10 +35,14 @@ namespace {
 // turn-rate bias estimated (BatchSmoother::EstimateOdometryCalibration). Landmark RMSE: the final
 // map, all its landmarks against the truth at the last step. Solved every kSolveEveryS of run
 // time (warm-started: Gauss-Newton from the dead-reckoned paths of a whole run falls into local
-// minima) and at the end.
+// minima) and at the end. "Alone, online": the online yardstick of each robot alone, the pose at
+// every step given the data up to it (each robot's smoother solved every kOnlineSolveEveryS, the
+// poses in between followed from the last solution by the odometry), scored over the run as the
+// agents' online estimates are; its landmark figure is the final map's.
 constexpr double kSolveEveryS = 10.0;
+constexpr double kOnlineSolveEveryS = 1.0;
 struct SmootherRun {
-  RobotRun joint, alone;
+  RobotRun joint, alone, online;
   common::Pose2 joint_t_0i;  // the joint estimate's T(G_first <- G_i)
 };
 std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::uint64_t seed, bool calibrate,
@@ -68,8 +72,10 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
     for (auto& a : alone) a->EstimateOdometryCalibration();
   }
   std::vector<std::vector<common::Pose2>> truth(n);  // in each robot's own frame, steps 1..
+  std::vector<std::vector<common::Pose2>> online(n, std::vector<common::Pose2>{common::Pose2{}});  // steps 0..
   common::GroundTruth last_truth;
-  const int solve_every = std::max(1, static_cast<int>(std::lround(kSolveEveryS / options.run.dt_s)));
+  const auto every = [&](double s) { return std::max(1, static_cast<int>(std::lround(s / options.run.dt_s))); };
+  const int solve_every = every(kSolveEveryS), online_solve_every = every(kOnlineSolveEveryS);
   common::ProgressLine line;
   for (int k = 1; k <= options.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();
@@ -79,9 +85,16 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
       alone[i]->Add({steps[i]});
       truth[i].push_back(evaluator::TruthInOwnFrame(last_truth.robots[i].pose, frames[i].second));
     }
-    if (k % solve_every == 0 || k == options.run.steps) {
-      joint.Solve();
+    const bool last = k == options.run.steps;
+    if (k % online_solve_every == 0 && !last) {
       for (auto& a : alone) a->Solve();
+    }
+    for (int i = 0; i < n; ++i) online[i].push_back(alone[i]->Pose());
+    if (k % solve_every == 0 || last) {
+      joint.Solve();
+      if (last) {
+        for (auto& a : alone) a->Solve();
+      }
       if (progress) {
         line.Show(std::string(calibrate ? "odometry calibrated" : "as configured") + ": step " + std::to_string(k) +
                       "/" + std::to_string(options.run.steps) + " solved",
@@ -91,11 +104,11 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   }
   std::vector<evaluator::TruePoint> true_landmarks;
   for (const auto& l : last_truth.landmarks) true_landmarks.push_back({l.pose.Translation(), std::stoi(l.id)});
-  // Scores robot i's path of `reference` (robot r of its set), moved by `to_own` into G_i.
-  auto score = [&](int i, const robot_agent::smoother::BatchSmoother& reference, int r, const common::Pose2& to_own) {
+  // Scores a path of robot i (steps 0..) and the final map of `reference`, moved by `to_own` into G_i.
+  auto score = [&](int i, const robot_agent::smoother::BatchSmoother& reference, const common::Pose2& to_own,
+                   const std::vector<common::Pose2>& path) {
     RobotRun run;
     std::vector<double> position, heading, landmark;
-    const std::vector<common::Pose2>& path = reference.Path(r);
     for (std::size_t t = 1; t < path.size(); ++t) {
       const common::Pose2 pose = common::Compose(to_own, path[t]);
       position.push_back(evaluator::PositionError(pose, truth[i][t - 1]));
@@ -117,8 +130,9 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
     // T(G_first <- G_i): robot i's estimated first pose over its known one; its inverse is the
     // rigid motion that puts the estimate into G_i.
     out[i].joint_t_0i = common::Compose(joint.FirstPose(i), common::Inverse(starts[i]));
-    out[i].joint = score(i, joint, i, common::Inverse(out[i].joint_t_0i));
-    out[i].alone = score(i, *alone[i], 0, common::Pose2{});
+    out[i].joint = score(i, joint, common::Inverse(out[i].joint_t_0i), joint.Path(i));
+    out[i].alone = score(i, *alone[i], common::Pose2{}, alone[i]->Path(0));
+    out[i].online = score(i, *alone[i], common::Pose2{}, online[i]);
   }
   return out;
 }
@@ -134,21 +148,23 @@ int PrintSmoother(const common::ScenarioOptions& options, std::uint64_t first_se
   });
   nlohmann::json json =
       StartReport(options, first_seed, num_seeds, "MAP smoother of the whole run, median (p90) over seeds");
-  const char* kVariants[] = {"jointly", "jointly, odometry calibrated", "alone", "alone, odometry calibrated"};
+  const char* kVariants[] = {"jointly",      "jointly, odometry calibrated",     "alone", "alone, odometry calibrated",
+                             "alone online", "alone online, odometry calibrated"};
+  constexpr int kNumVariants = 6;
+  const auto variant = [](const SmootherRun& r, int v) -> const RobotRun& {
+    return v < 2 ? r.joint : v < 4 ? r.alone : r.online;
+  };
   std::printf("%-6s %-17s", "robot", "metric");
   for (const char* v : kVariants) std::printf(" %28s", v);
   std::printf("\n");
-  std::vector<std::vector<double>> position_medians(4);
+  std::vector<std::vector<double>> position_medians(kNumVariants);
   for (std::size_t i = 0; i < options.robots.size(); ++i) {
     const std::string& id = options.robots[i].id;
     for (int m = 0; m < 3; ++m) {
       std::printf("%-6s %-17s", id.c_str(), kMetricNames[m]);
-      for (int v = 0; v < 4; ++v) {
+      for (int v = 0; v < kNumVariants; ++v) {
         std::vector<double> values;
-        for (int s = 0; s < num_seeds; ++s) {
-          const SmootherRun& r = results[2 * s + v % 2][i];
-          values.push_back(Metric(v < 2 ? r.joint : r.alone, m));
-        }
+        for (int s = 0; s < num_seeds; ++s) values.push_back(Metric(variant(results[2 * s + v % 2][i], v), m));
         std::printf("      %8.3f (p90 %8.3f)", evaluator::Median(values), evaluator::Percentile(values, 90.0));
         json["robots"][id][kMetricNames[m]][kVariants[v]] = values;
         if (m == 0) position_medians[v].push_back(evaluator::Median(values));
@@ -165,8 +181,10 @@ int PrintSmoother(const common::ScenarioOptions& options, std::uint64_t first_se
     json["joint_frames"][std::to_string(first_seed + s)] = frames;
   }
   std::printf("median over the robots of the position RMSE:");
-  for (int v = 0; v < 4; ++v)
-    std::printf(" %s %.3f m%s", kVariants[v], evaluator::Median(position_medians[v]), v < 3 ? ";" : "\n");
+  for (int v = 0; v < kNumVariants; ++v) {
+    std::printf(" %s %.3f m%s", kVariants[v], evaluator::Median(position_medians[v]),
+                v < kNumVariants - 1 ? ";" : "\n");
+  }
   WriteJson(json, json_path);
   return 0;
 }
