@@ -320,6 +320,28 @@ TEST(FastSlam, ReportedIdentitiesAreUsed) {
   EXPECT_EQ(ids.size(), 8u);
 }
 
+// An identified reading beyond the outlier gate, which the filter leaves out, keeps its
+// landmark's track as its label (a smoother fed by the labels decides by its own gate).
+TEST(FastSlam, AReadingBeyondTheOutlierGateKeepsItsLabel) {
+  common::ScenarioOptions o = StaticScenario(100);
+  o.sensors.lidar.report_identity = true;
+  o.filter.outlier_gate_probability = 0.999;
+  TinyWorld world(o, 3);
+  const auto filter = CreateFilter(common::AgentOptionsFor(o, "r1"), 3);
+  for (int k = 0; k < 40; ++k) filter->Process(world.Step());
+  common::SensorStep step = world.Step();
+  ASSERT_FALSE(step.lidar.landmarks.empty());
+  common::LandmarkDetection& outlier = step.lidar.landmarks.front();
+  outlier.range_m += 3.0;
+  filter->Process(step);
+  const FilterEstimate e = filter->Estimate();
+  ASSERT_EQ(e.detection_tracks.size(), step.lidar.landmarks.size());
+  const auto it = std::find_if(e.landmarks.begin(), e.landmarks.end(),
+                               [&](const MapLandmark& l) { return l.landmark_id == outlier.landmark_id; });
+  ASSERT_NE(it, e.landmarks.end());
+  EXPECT_EQ(e.detection_tracks.front(), it->track_id);
+}
+
 bool SameEstimate(const FilterEstimate& a, const FilterEstimate& b) {
   if (a.landmarks.size() != b.landmarks.size()) return false;
   for (std::size_t i = 0; i < a.landmarks.size(); ++i) {
