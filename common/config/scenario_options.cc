@@ -364,6 +364,7 @@ void ParseSmoother(Section& filter, robot_agent::SmootherOptions* d) {
   Section s(filter.Raw("smoother"), "filter.smoother");
   d->window_keyframes = s.Get("window_keyframes", d->window_keyframes);
   d->max_keyframe_gap_steps = s.Get("max_keyframe_gap_steps", d->max_keyframe_gap_steps);
+  d->relinearize_threshold = s.Get("relinearize_threshold", d->relinearize_threshold);
   d->front_end_particles = s.Get("front_end_particles", d->front_end_particles);
   d->max_iterations = s.Get("max_iterations", d->max_iterations);
   d->huber_k = s.Get("huber_k", d->huber_k);
@@ -745,6 +746,8 @@ void CheckSmoother(const robot_agent::SmootherOptions& s, Checker* c) {
            s.window_keyframes, "must be in 2..10000");
   c->Check(s.max_keyframe_gap_steps >= 1 && s.max_keyframe_gap_steps <= 10000, "filter.smoother.max_keyframe_gap_steps",
            s.max_keyframe_gap_steps, "must be in 1..10000");
+  c->Check(s.relinearize_threshold >= 0.0 && s.relinearize_threshold <= 100.0, "filter.smoother.relinearize_threshold",
+           s.relinearize_threshold, "must be in [0, 100]");
   c->Check(s.front_end_particles >= 1 && s.front_end_particles <= 100000, "filter.smoother.front_end_particles",
            s.front_end_particles, "must be in 1..100000");
   c->Check(s.max_iterations >= 1 && s.max_iterations <= 1000, "filter.smoother.max_iterations", s.max_iterations,

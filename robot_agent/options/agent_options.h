@@ -28,10 +28,14 @@ struct KnownKinematics {
 // The online smoother (filter.type smoother; docs/smoother.md): a fixed-lag keyframe graph fed by a
 // FastSLAM front end that labels the readings.
 struct SmootherOptions {
-  int window_keyframes = 40;                 // keyframes kept as unknowns; older ones are marginalized
-  int max_keyframe_gap_steps = 10;           // a keyframe at least this often, readings or not
-  int front_end_particles = 50;              // the front end's particles
-  int max_iterations = 1;                    // Levenberg-Marquardt iterations per solve
+  int window_keyframes = 40;        // keyframes kept as unknowns; older ones are marginalized
+  int max_keyframe_gap_steps = 10;  // a keyframe at least this often, readings or not
+  int front_end_particles = 50;     // the front end's particles
+  int max_iterations = 1;           // Levenberg-Marquardt iterations per solve
+  // When a variable of the marginalization prior has moved further than this from where the prior
+  // was linearized (metres, radians; the correction's components as they are), the whole run is
+  // solved again and the prior rebuilt at that solution (0: never).
+  double relinearize_threshold = 0.0;
   double huber_k = 3.0;                      // the Huber loss's width on a reading's whitened residual norm
   double reading_gate_probability = 0.9999;  // chi-square 2 dof gate of a reading at the solution
   // Prior standard deviations of the odometry correction: speed factor, turn-rate factor,

@@ -31,6 +31,7 @@ KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
     : dt_s_(options.dt_s),
       window_keyframes_(std::max(2, options.filter.smoother.window_keyframes)),
       max_iterations_(std::max(1, options.filter.smoother.max_iterations)),
+      relinearize_threshold_(options.filter.smoother.relinearize_threshold),
       huber_k_(options.filter.smoother.huber_k),
       gate_(common::ChiSquare2Quantile(options.filter.smoother.reading_gate_probability)),
       robot_var_(options.noise.robot_process_var),
@@ -75,6 +76,24 @@ void KeyframeGraph::AddKeyframe(int step, const std::vector<Reading>& readings) 
   }
   window_.push_back(std::move(kf));
   while (static_cast<int>(window_.size()) > window_keyframes_) Marginalize();
+}
+
+double KeyframeGraph::PriorDrift() const {
+  double drift = 0.0;
+  for (std::size_t i = 0; i < prior_.vars.size(); ++i) {
+    drift = std::max(drift, Difference(prior_.vars[i], prior_.x0[i]).cwiseAbs().maxCoeff());
+  }
+  return drift;
+}
+
+void KeyframeGraph::Relinearize() {
+  KeyframeGraph all = Whole();
+  all.SolveWithGate();
+  all.window_keyframes_ = window_keyframes_;
+  all.max_iterations_ = max_iterations_;
+  // (The solve has started every landmark and mover state.)
+  while (static_cast<int>(all.window_.size()) > window_keyframes_) all.MarginalizeOldest();
+  *this = std::move(all);
 }
 
 void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::uint32_t>& from_to) {
@@ -142,10 +161,10 @@ Eigen::VectorXd KeyframeGraph::Difference(const Var& v, const Eigen::VectorXd& x
 }
 
 const KeyframeGraph::Keyframe* KeyframeGraph::FindKeyframe(int step) const {
-  for (const auto& kf : window_) {
-    if (kf.step == step) return &kf;
-  }
-  return nullptr;
+  // The window's steps increase.
+  const auto it =
+      std::lower_bound(window_.begin(), window_.end(), step, [](const Keyframe& kf, int s) { return kf.step < s; });
+  return it != window_.end() && it->step == step ? &*it : nullptr;
 }
 
 KeyframeGraph::Keyframe* KeyframeGraph::FindKeyframe(int step) {
@@ -459,6 +478,7 @@ std::size_t KeyframeGraph::EstimatorBytes() const {
 
 void KeyframeGraph::Solve() {
   SolveWithGate();
+  if (relinearize_threshold_ > 0.0 && !history_.empty() && PriorDrift() > relinearize_threshold_) Relinearize();
   ComputeCovariances();
 }
 
@@ -470,6 +490,10 @@ void KeyframeGraph::SolveWithGate() {
 void KeyframeGraph::Marginalize() {
   StartLandmarks();
   StartMovers();
+  MarginalizeOldest();
+}
+
+void KeyframeGraph::MarginalizeOldest() {
   const std::vector<Var> vars = Variables(true);
   const Layout layout = MakeLayout(vars);
   const Rows rows = Equations(layout, true, true);
@@ -596,7 +620,9 @@ Eigen::Matrix3d KeyframeGraph::PoseCovariance() const {
 
 std::vector<KeyframeGraph::Landmark> KeyframeGraph::Landmarks() const {
   std::vector<Landmark> out;
-  for (const auto& [track, cov] : landmark_cov_) out.push_back({track, landmarks_.at(track), cov});
+  for (const auto& [track, cov] : landmark_cov_) {
+    if (static_tracks_.count(track) > 0) out.push_back({track, landmarks_.at(track), cov});
+  }
   return out;
 }
 
@@ -629,7 +655,7 @@ std::vector<std::pair<int, Pose2>> KeyframeGraph::Path() const {
   return out;
 }
 
-std::vector<std::pair<int, Pose2>> KeyframeGraph::SmoothAll() const {
+KeyframeGraph KeyframeGraph::Whole() const {
   KeyframeGraph all(*this);
   all.window_.insert(all.window_.begin(), history_.begin(), history_.end());
   all.history_.clear();
@@ -637,6 +663,11 @@ std::vector<std::pair<int, Pose2>> KeyframeGraph::SmoothAll() const {
   all.prior_ = calibration_prior_;
   all.window_keyframes_ = std::numeric_limits<int>::max();
   all.max_iterations_ = 100;
+  return all;
+}
+
+std::vector<std::pair<int, Pose2>> KeyframeGraph::SmoothAll() const {
+  KeyframeGraph all = Whole();
   all.SolveWithGate();
   return all.Path();
 }

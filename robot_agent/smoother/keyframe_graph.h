@@ -128,6 +128,7 @@ class KeyframeGraph {
   Eigen::Matrix3d PoseCovariance() const;
   int KeyframeStep() const { return window_.back().step; }
   const common::Pose2& KeyframePose() const { return window_.back().pose; }
+  // The landmarks the caller names static now (SetTracks), with their last covariances.
   std::vector<Landmark> Landmarks() const;
   // Each moving landmark's newest state in the window.
   std::vector<Mover> Movers() const;
@@ -245,7 +246,16 @@ class KeyframeGraph {
   double SolveOnce();
   void SolveWithGate();  // SolveOnce, then again while the gate's decisions change
   bool UpdateInliers();
-  void Marginalize();
+  void Marginalize();        // starts the new landmarks and mover states, then MarginalizeOldest
+  void MarginalizeOldest();  // every variable the oldest keyframe's factors touch started
+  // The largest component of x - x0 over the prior's variables.
+  double PriorDrift() const;
+  // The whole run solved to convergence, then the window's prior rebuilt at that solution by
+  // marginalizing the history again (relinearize_threshold).
+  void Relinearize();
+  // A copy with every keyframe in the window, none marginalized (the prior the calibration's
+  // alone), solved to convergence by SolveWithGate.
+  KeyframeGraph Whole() const;
   std::vector<Var> CovarianceTargets(const std::vector<Var>& vars) const;
   // The information matrix (with the ridge) at the solution, factorized.
   std::shared_ptr<const Factorization> Information(const std::vector<Var>& vars, const Layout& layout) const;
@@ -257,6 +267,7 @@ class KeyframeGraph {
   double dt_s_;
   int window_keyframes_;
   int max_iterations_;
+  double relinearize_threshold_;
   double huber_k_, gate_;
   Eigen::Vector3d robot_var_, landmark_var_;
   Eigen::Vector2d z_w_;

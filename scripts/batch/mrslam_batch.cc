@@ -10,7 +10,7 @@
 //   --transform-reference: per ordered pair of robots, the error of T(G_i <- G_j) at the end of
 //     their first encounter as the joint MAP reference holds it: transform_reference;
 //   --smoother: each robot's error under the MAP smoother of the whole run, jointly and alone, and
-//     under the online yardstick alone (each pose given the data up to it): smoother_reference;
+//     under the online yardstick alone (each pose from the data up to it): smoother_reference;
 //   --slip-recovery: whether each robot's filter recovers from the scenario's slips:
 //     slip_recovery;
 //   --held DIR [--union]: each robot's error under the joint estimate over the raw measurements
@@ -68,7 +68,7 @@ int Main(int argc, char** argv) {
   app.add_flag("--smoother", smoother,
                "Print instead each robot's error under the MAP smoother of the whole run: all robots' data "
                "jointly (only the first robot's start known) and each robot's data alone, and under the "
-               "online yardstick of each robot alone (each pose given the data up to it)");
+               "online yardstick of each robot alone (each pose from the data up to it)");
   app.add_flag("--slip-recovery", slip_recovery,
                "Print instead whether each slipping robot's filter recovers from its first slip (robots[].slips), "
                "against the same seed without the slips");

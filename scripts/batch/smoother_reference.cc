@@ -35,12 +35,11 @@ namespace {
 // turn-rate bias estimated (BatchSmoother::EstimateOdometryCalibration). Landmark RMSE: the final
 // map, all its landmarks against the truth at the last step. Solved every kSolveEveryS of run
 // time (warm-started: Gauss-Newton from the dead-reckoned paths of a whole run falls into local
-// minima) and at the end. "Alone, online": the online yardstick of each robot alone, the pose at
-// every step given the data up to it (each robot's smoother solved every kOnlineSolveEveryS, the
-// poses in between followed from the last solution by the odometry), scored over the run as the
-// agents' online estimates are; its landmark figure is the final map's.
+// minima) and at the end. "Alone, online": a causal yardstick of each robot alone, its pose at
+// every step from the data up to it (its smoother's solution at the last solve, followed since by
+// the odometry), scored over the run as the agents' online estimates are; its landmark figure is
+// the final map's.
 constexpr double kSolveEveryS = 10.0;
-constexpr double kOnlineSolveEveryS = 1.0;
 struct SmootherRun {
   RobotRun joint, alone, online;
   common::Pose2 joint_t_0i;  // the joint estimate's T(G_first <- G_i)
@@ -74,8 +73,7 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
   std::vector<std::vector<common::Pose2>> truth(n);  // in each robot's own frame, steps 1..
   std::vector<std::vector<common::Pose2>> online(n, std::vector<common::Pose2>{common::Pose2{}});  // steps 0..
   common::GroundTruth last_truth;
-  const auto every = [&](double s) { return std::max(1, static_cast<int>(std::lround(s / options.run.dt_s))); };
-  const int solve_every = every(kSolveEveryS), online_solve_every = every(kOnlineSolveEveryS);
+  const int solve_every = std::max(1, static_cast<int>(std::lround(kSolveEveryS / options.run.dt_s)));
   common::ProgressLine line;
   for (int k = 1; k <= options.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();
@@ -85,22 +83,16 @@ std::vector<SmootherRun> RunSmootherSeed(common::ScenarioOptions options, std::u
       alone[i]->Add({steps[i]});
       truth[i].push_back(evaluator::TruthInOwnFrame(last_truth.robots[i].pose, frames[i].second));
     }
-    const bool last = k == options.run.steps;
-    if (k % online_solve_every == 0 && !last) {
-      for (auto& a : alone) a->Solve();
-    }
-    for (int i = 0; i < n; ++i) online[i].push_back(alone[i]->Pose());
-    if (k % solve_every == 0 || last) {
+    if (k % solve_every == 0 || k == options.run.steps) {
       joint.Solve();
-      if (last) {
-        for (auto& a : alone) a->Solve();
-      }
+      for (auto& a : alone) a->Solve();
       if (progress) {
         line.Show(std::string(calibrate ? "odometry calibrated" : "as configured") + ": step " + std::to_string(k) +
                       "/" + std::to_string(options.run.steps) + " solved",
                   k == options.run.steps);
       }
     }
+    for (int i = 0; i < n; ++i) online[i].push_back(alone[i]->Pose());
   }
   std::vector<evaluator::TruePoint> true_landmarks;
   for (const auto& l : last_truth.landmarks) true_landmarks.push_back({l.pose.Translation(), std::stoi(l.id)});
@@ -164,6 +156,7 @@ int PrintSmoother(const common::ScenarioOptions& options, std::uint64_t first_se
       std::printf("%-6s %-17s", id.c_str(), kMetricNames[m]);
       for (int v = 0; v < kNumVariants; ++v) {
         std::vector<double> values;
+        values.reserve(num_seeds);
         for (int s = 0; s < num_seeds; ++s) values.push_back(Metric(variant(results[2 * s + v % 2][i], v), m));
         std::printf("      %8.3f (p90 %8.3f)", evaluator::Median(values), evaluator::Percentile(values, 90.0));
         json["robots"][id][kMetricNames[m]][kVariants[v]] = values;
