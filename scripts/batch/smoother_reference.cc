@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <string>
@@ -140,9 +141,10 @@ int PrintSmoother(const common::ScenarioOptions& options, std::uint64_t first_se
   });
   nlohmann::json json =
       StartReport(options, first_seed, num_seeds, "MAP smoother of the whole run, median (p90) over seeds");
-  const char* kVariants[] = {"jointly",      "jointly, odometry calibrated",     "alone", "alone, odometry calibrated",
-                             "alone online", "alone online, odometry calibrated"};
-  constexpr int kNumVariants = 6;
+  static constexpr const char* kVariants[] = {"jointly",      "jointly, odometry calibrated",
+                                              "alone",        "alone, odometry calibrated",
+                                              "alone online", "alone online, odometry calibrated"};
+  constexpr int kNumVariants = static_cast<int>(std::size(kVariants));
   const auto variant = [](const SmootherRun& r, int v) -> const RobotRun& {
     return v < 2 ? r.joint : v < 4 ? r.alone : r.online;
   };
