@@ -92,7 +92,8 @@ void KeyframeGraph::Relinearize() {
   all.window_keyframes_ = window_keyframes_;
   all.max_iterations_ = max_iterations_;
   // (The solve has started every landmark and mover state.)
-  while (static_cast<int>(all.window_.size()) > window_keyframes_) all.MarginalizeOldest();
+  const int leaving = static_cast<int>(all.window_.size()) - window_keyframes_;
+  if (leaving > 0) all.MarginalizeOldest(leaving);
   *this = std::move(all);
 }
 
@@ -171,34 +172,38 @@ KeyframeGraph::Keyframe* KeyframeGraph::FindKeyframe(int step) {
   return const_cast<Keyframe*>(std::as_const(*this).FindKeyframe(step));
 }
 
-std::vector<KeyframeGraph::Var> KeyframeGraph::Variables(bool only_oldest) const {
+std::vector<KeyframeGraph::Var> KeyframeGraph::Variables(int oldest) const {
   std::set<Var> vars(prior_.vars.begin(), prior_.vars.end());
   vars.insert({Var::kCorrection, 0});
-  const std::size_t kfs = only_oldest ? std::min<std::size_t>(2, window_.size()) : window_.size();
+  const std::size_t leaving = std::min<std::size_t>(oldest == 0 ? 1 : oldest, window_.size());
+  const std::size_t kfs = oldest == 0 ? window_.size() : std::min<std::size_t>(leaving + 1, window_.size());
   for (std::size_t i = 0; i < kfs; ++i) {
     const Keyframe& kf = window_[i];
     if (!kf.fixed) vars.insert({Var::kPose, kf.step});
-    if (only_oldest && i > 0) continue;
+    if (oldest > 0 && i >= leaving) continue;
     for (const auto& r : kf.readings) {
       if (Active(r) && landmarks_.count(r.z.track) > 0) vars.insert({Var::kLandmark, r.z.track});
     }
   }
-  // Mover states: all (only_oldest: those at the oldest keyframe and their successors).
-  const int oldest_step = window_.front().step;
+  // Mover states: all (oldest > 0: those at the leaving keyframes and each chain's next one).
+  const int last_step = window_[leaving - 1].step;
   std::vector<Var> eliminated;
-  if (!window_.front().fixed) eliminated.push_back({Var::kPose, oldest_step});
-  for (const auto& [key, state] : movers_) {
-    if (MoverStep(key) == oldest_step) eliminated.push_back({Var::kMover, key});
-    if (!only_oldest) vars.insert({Var::kMover, key});
+  for (std::size_t i = 0; i < leaving; ++i) {
+    if (!window_[i].fixed) eliminated.push_back({Var::kPose, window_[i].step});
   }
-  if (only_oldest) {
+  for (const auto& [key, state] : movers_) {
+    if (MoverStep(key) <= last_step) eliminated.push_back({Var::kMover, key});
+    if (oldest == 0) vars.insert({Var::kMover, key});
+  }
+  if (oldest > 0) {
     for (const Var& v : eliminated) {
       if (v.kind != Var::kMover) continue;
-      const std::vector<int> chain = ChainSteps(MoverTrack(v.key));
-      if (chain.size() > 1) vars.insert({Var::kMover, MoverKey(MoverTrack(v.key), chain[1])});
+      const auto next = movers_.upper_bound(MoverKey(MoverTrack(v.key), last_step));
+      if (next != movers_.end() && MoverTrack(next->first) == MoverTrack(v.key))
+        vars.insert({Var::kMover, next->first});
     }
   }
-  // The oldest keyframe's pose and mover states first: a marginalization eliminates them.
+  // The leaving keyframes' poses and mover states first: a marginalization eliminates them.
   for (const Var& v : eliminated) vars.erase(v);
   std::vector<Var> out = eliminated;
   out.insert(out.end(), vars.begin(), vars.end());
@@ -328,21 +333,22 @@ void KeyframeGraph::AddMoverRows(const Layout& layout, std::uint32_t track, int 
   rows->Add(r, {{layout.Col(a), w * between.ja}, {layout.Col(b), w * between.jb}});
 }
 
-void KeyframeGraph::BuildRows(const Layout& layout, bool only_oldest, Rows* rows) const {
-  const std::size_t last = only_oldest ? std::min<std::size_t>(1, window_.size() - 1) : window_.size() - 1;
+void KeyframeGraph::BuildRows(const Layout& layout, int oldest, Rows* rows) const {
+  const std::size_t leaving = oldest == 0 ? window_.size() : std::min<std::size_t>(oldest, window_.size());
+  const std::size_t last = std::min(leaving, window_.size() - 1);
   for (std::size_t i = 0; i <= last; ++i) {
     if (i > 0 && window_[i].has_odometry) AddOdometryRows(layout, window_[i - 1], window_[i], rows);
-    if (!only_oldest || i == 0) AddReadingRows(layout, window_[i], rows);
+    if (i < leaving) AddReadingRows(layout, window_[i], rows);
   }
-  const int oldest = window_.front().step;
+  const int last_step = window_[leaving - 1].step;
   std::uint32_t track = 0;
   int previous = -1;
   for (const auto& [key, state] : movers_) {
     const bool same_chain = MoverTrack(key) == track && previous >= 0;
-    if (same_chain && (!only_oldest || previous == oldest)) AddMoverRows(layout, track, previous, MoverStep(key), rows);
+    if (same_chain && previous <= last_step) AddMoverRows(layout, track, previous, MoverStep(key), rows);
     track = MoverTrack(key);
     previous = MoverStep(key);
-    if (chain_starts_.count(key) > 0 && (!only_oldest || previous == oldest)) {
+    if (chain_starts_.count(key) > 0 && previous <= last_step) {
       // The weak prior on the heading the chain started with.
       Rows::Block j = Rows::Block::Zero(1, 3);
       j(0, 2) = 1e-3;
@@ -377,9 +383,9 @@ void KeyframeGraph::AddPrior(const Layout& layout, Rows* rows) const {
 
 // The normal equations (or, without jacobians, only the cost) of every factor of the window
 // and the prior at the current values.
-KeyframeGraph::Rows KeyframeGraph::Equations(const Layout& layout, bool only_oldest, bool jacobians) const {
+KeyframeGraph::Rows KeyframeGraph::Equations(const Layout& layout, int oldest, bool jacobians) const {
   Rows rows(layout.cols, jacobians);
-  BuildRows(layout, only_oldest, &rows);
+  BuildRows(layout, oldest, &rows);
   AddPrior(layout, &rows);
   return rows;
 }
@@ -389,12 +395,12 @@ KeyframeGraph::Rows KeyframeGraph::Equations(const Layout& layout, bool only_old
 double KeyframeGraph::SolveOnce() {
   StartLandmarks();
   StartMovers();
-  const std::vector<Var> vars = Variables(false);
+  const std::vector<Var> vars = Variables(0);
   const Layout layout = MakeLayout(vars);
   std::vector<Eigen::VectorXd> saved;  // the values before a step, in the order of vars
   LeastSquares problem;
   problem.cols = layout.cols;
-  problem.equations = [&](bool jacobians) { return Equations(layout, false, jacobians); };
+  problem.equations = [&](bool jacobians) { return Equations(layout, 0, jacobians); };
   problem.step = [&](const Eigen::VectorXd& delta) {
     for (const Var& v : vars) SetValue(v, Value(v) + delta.segment(layout.Col(v), Dim(v)));
   };
@@ -490,37 +496,37 @@ void KeyframeGraph::SolveWithGate() {
 void KeyframeGraph::Marginalize() {
   StartLandmarks();
   StartMovers();
-  MarginalizeOldest();
+  MarginalizeOldest(1);
 }
 
-void KeyframeGraph::MarginalizeOldest() {
-  const std::vector<Var> vars = Variables(true);
+void KeyframeGraph::MarginalizeOldest(int count) {
+  const std::vector<Var> vars = Variables(count);
   const Layout layout = MakeLayout(vars);
-  const Rows rows = Equations(layout, true, true);
-  const Eigen::MatrixXd h = Eigen::MatrixXd(rows.Matrix()).selfadjointView<Eigen::Lower>();
+  const Rows rows = Equations(layout, count, true);
+  const Eigen::SparseMatrix<double> h = rows.Matrix();  // the lower triangle
   const Eigen::VectorXd& g = rows.g;
-  const Keyframe& oldest = window_.front();
-  // The oldest pose's and mover states' columns come first.
+  const int last_step = window_[count - 1].step;
+  // The leaving poses' and mover states' columns come first.
   std::size_t eliminated = 0;
   int m = 0;
-  while (eliminated < vars.size() &&
-         (vars[eliminated].kind == Var::kMover ? MoverStep(vars[eliminated].key) == oldest.step
-                                               : vars[eliminated] == Var{Var::kPose, oldest.step})) {
-    m += Dim(vars[eliminated++]);
-  }
+  const auto leaves = [&](const Var& v) {
+    return (v.kind == Var::kPose && v.key <= last_step) || (v.kind == Var::kMover && MoverStep(v.key) <= last_step);
+  };
+  while (eliminated < vars.size() && leaves(vars[eliminated])) m += Dim(vars[eliminated++]);
   const int n = layout.cols - m;
   Prior next;
   next.vars.assign(vars.begin() + static_cast<std::ptrdiff_t>(eliminated), vars.end());
   for (const Var& v : next.vars) next.x0.push_back(Value(v));
-  next.h = h.bottomRightCorner(n, n);
+  next.h = Eigen::MatrixXd(h.bottomRightCorner(n, n)).selfadjointView<Eigen::Lower>();
   next.g = g.tail(n);
   if (m > 0) {
     // (A state without information left, e.g. of a chain that ended, is dropped.)
-    const Eigen::MatrixXd hmm = h.topLeftCorner(m, m) + 1e-9 * Eigen::MatrixXd::Identity(m, m);
-    const Eigen::MatrixXd hrm = h.bottomLeftCorner(n, m);
-    const Eigen::MatrixXd k = hrm * hmm.ldlt().solve(Eigen::MatrixXd::Identity(m, m));
-    next.h -= k * hrm.transpose();
-    next.g -= k * g.head(m);
+    Eigen::SparseMatrix<double> hmm = h.topLeftCorner(m, m);
+    for (int c = 0; c < m; ++c) hmm.coeffRef(c, c) += 1e-9;
+    const Eigen::SparseMatrix<double> hrm = h.bottomLeftCorner(n, m);
+    const Factorization elimination(hmm);
+    next.h -= hrm * elimination.solve(Eigen::MatrixXd(hrm.transpose()));
+    next.g -= hrm * elimination.solve(g.head(m));
   }
   next.h = 0.5 * (next.h + next.h.transpose());
   prior_ = std::move(next);
@@ -529,8 +535,10 @@ void KeyframeGraph::MarginalizeOldest() {
     movers_.erase(vars[i].key);
     chain_starts_.erase(vars[i].key);
   }
-  history_.push_back(oldest);
-  window_.pop_front();
+  for (int i = 0; i < count; ++i) {
+    history_.push_back(std::move(window_.front()));
+    window_.pop_front();
+  }
   window_.front().has_odometry = false;
 }
 
@@ -560,11 +568,11 @@ std::shared_ptr<const Factorization> KeyframeGraph::Information(const std::vecto
   if (information_ != nullptr && information_vars_ == vars) return information_;
   Eigen::SparseMatrix<double> identity(layout.cols, layout.cols);
   identity.setIdentity();
-  return std::make_shared<const Factorization>(Equations(layout, false, true).Matrix() + kRidge * identity);
+  return std::make_shared<const Factorization>(Equations(layout, 0, true).Matrix() + kRidge * identity);
 }
 
 void KeyframeGraph::ComputeCovariances() {
-  const std::vector<Var> vars = Variables(false);
+  const std::vector<Var> vars = Variables(0);
   const Layout layout = MakeLayout(vars);
   const std::shared_ptr<const Factorization> factorization = Information(vars, layout);
   const Factorization& information = *factorization;

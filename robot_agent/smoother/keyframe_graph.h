@@ -230,24 +230,26 @@ class KeyframeGraph {
   const Keyframe* FindKeyframe(int step) const;
   Keyframe* FindKeyframe(int step);
   bool Active(const StoredReading& r) const { return r.inlier && static_tracks_.count(r.z.track) > 0; }
-  // The variables of the whole window (or, only_oldest, of the oldest keyframe's factors and
-  // the prior), in order.
-  std::vector<Var> Variables(bool only_oldest) const;
+  // The variables of the whole window (oldest 0), or of the oldest `oldest` keyframes' factors
+  // and the prior, those keyframes' poses and mover states first.
+  std::vector<Var> Variables(int oldest) const;
   Layout MakeLayout(const std::vector<Var>& vars) const;
   void StartLandmarks();
-  // The whitened rows of the factors (only_oldest: those touching the oldest keyframe).
-  void BuildRows(const Layout& layout, bool only_oldest, Rows* rows) const;
+  // The whitened rows of the factors (oldest > 0: those touching the oldest `oldest` keyframes).
+  void BuildRows(const Layout& layout, int oldest, Rows* rows) const;
   void AddOdometryRows(const Layout& layout, const Keyframe& previous, const Keyframe& kf, Rows* rows) const;
   void AddReadingRows(const Layout& layout, const Keyframe& kf, Rows* rows) const;
   void AddMoverRows(const Layout& layout, std::uint32_t track, int from_step, int to_step, Rows* rows) const;
   // The prior's terms: H_p at the layout's columns, its gradient at the current values, its cost.
   void AddPrior(const Layout& layout, Rows* rows) const;
-  Rows Equations(const Layout& layout, bool only_oldest, bool jacobians) const;
+  Rows Equations(const Layout& layout, int oldest, bool jacobians) const;
   double SolveOnce();
   void SolveWithGate();  // SolveOnce, then again while the gate's decisions change
   bool UpdateInliers();
-  void Marginalize();        // starts the new landmarks and mover states, then MarginalizeOldest
-  void MarginalizeOldest();  // every variable the oldest keyframe's factors touch started
+  void Marginalize();  // starts the new landmarks and mover states, then MarginalizeOldest
+  // Eliminates the oldest `count` keyframes' poses and mover states at once (a sparse Schur
+  // complement) into the prior; every variable their factors touch started.
+  void MarginalizeOldest(int count);
   // The largest component of x - x0 over the prior's variables.
   double PriorDrift() const;
   // The whole run solved to convergence, then the window's prior rebuilt at that solution by
