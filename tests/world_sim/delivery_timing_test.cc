@@ -47,6 +47,21 @@ TEST(DeliveryTimingTest, AnEstimateWrittenAfterTheNextStepsSensorDataIsLate) {
   EXPECT_EQ(timing.Summary("r1").late_estimates, 2);
 }
 
+TEST(DeliveryTimingTest, SensorDataTakenAfterItsOwnStepsEstimateStillJudgesTheOneBefore) {
+  DeliveryTiming timing({"r1"});
+  // Taken in batches, each step's estimate before the same step's odometry. Step 4's estimate
+  // is written after step 5's odometry (late); the others 1 ms after their own step's.
+  for (int k = 1; k <= 10; ++k) {
+    const std::int64_t sensor = kStart + k * kStepNs - 50'000;
+    timing.StepWritten(k, kStart + k * kStepNs);
+    const std::int64_t written = k == 4 ? kStart + 5 * kStepNs : sensor + 1'000'000;
+    timing.EstimateDelivered("r1", k, written, written + 100'000, 1.0);
+    timing.SensorWritten("r1", k, sensor);
+  }
+  EXPECT_EQ(timing.Summary("r1").late_estimates, 1);
+  EXPECT_LE(timing.Held(), 1U);  // only step 10's estimate, awaiting step 11's odometry
+}
+
 TEST(DeliveryTimingTest, AnEstimateBeforeItsStepsTruthIsTimedWhenTheTruthComes) {
   DeliveryTiming timing({"r1", "r2"});
   timing.EstimateDelivered("r1", 1, kStart + 900'000, kStart + 1'000'000, 0.5);

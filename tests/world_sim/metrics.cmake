@@ -27,3 +27,8 @@ mrslam_add_test(view_steps_test
 mrslam_add_test(delivery_timing_test
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/delivery_timing_test.cc
   LIBS mrslam_run_evaluator)
+
+# A robot's true path by step, kept for scoring its final trajectory.
+mrslam_add_test(truth_path_test
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/truth_path_test.cc
+  LIBS mrslam_run_evaluator)

@@ -4,11 +4,12 @@
 #include <cmath>
 
 #include "world_sim/evaluator/metrics.h"
+#include "world_sim/evaluator/truth_path.h"
 
 namespace mrslam::evaluator {
 
-DeliveryTiming::DeliveryTiming(const std::vector<std::string>& robot_ids) {
-  for (const auto& id : robot_ids) robots_[id];
+DeliveryTiming::DeliveryTiming(const std::vector<std::string>& robot_ids, std::uint32_t steps) {
+  for (const auto& id : robot_ids) robots_[id].latency_us.reserve(std::min(steps, TruthPath::kReservedSteps));
 }
 
 void DeliveryTiming::StepWritten(std::uint32_t step, std::int64_t written_ns) {
@@ -25,9 +26,13 @@ void DeliveryTiming::StepWritten(std::uint32_t step, std::int64_t written_ns) {
 
 void DeliveryTiming::SensorWritten(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns) {
   RobotTiming& robot = robots_.at(robot_id);
-  if (written_ns <= 0 || (robot.any_estimate && step <= robot.newest_estimate)) return;
+  if (written_ns <= 0) return;
+  // Step k's data judges the estimate of step k - 1, which may have come, be on its way or be
+  // lost (estimates come in step order: lost once a later one came). It may be taken after
+  // the estimate of its own step (taken in a batch).
   robot.sensor_written[step] = written_ns;
   if (step > 0) JudgeLate(&robot, step - 1);
+  if (robot.any_estimate && step <= robot.newest_estimate + 1) robot.sensor_written.erase(step);
 }
 
 void DeliveryTiming::EstimateDelivered(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns,

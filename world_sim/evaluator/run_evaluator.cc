@@ -52,7 +52,9 @@ std::vector<std::string> RobotIds(const common::ScenarioOptions& scenario) {
 }  // namespace
 
 RunEvaluator::RunEvaluator(const common::ScenarioOptions& scenario, const std::string& out_dir)
-    : scenario_(scenario), out_dir_(out_dir), timing_(RobotIds(scenario)) {
+    : scenario_(scenario),
+      out_dir_(out_dir),
+      timing_(RobotIds(scenario), static_cast<std::uint32_t>(scenario.run.steps)) {
   const std::filesystem::path out(out_dir);
   std::filesystem::create_directories(out / "trajectories");
   OpenOrThrow(metrics_, out / "metrics.csv");
@@ -64,6 +66,8 @@ RunEvaluator::RunEvaluator(const common::ScenarioOptions& scenario, const std::s
   view_ << ViewHeader(scenario_).dump() << "\n";
   for (const auto& r : scenario.robots) {
     RobotRun& robot = robots_[r.id];
+    robot.truth_own.SetLastStep(static_cast<std::uint32_t>(scenario.run.steps));
+    robot.step_cpu_ms.reserve(std::min(static_cast<std::uint32_t>(scenario.run.steps), TruthPath::kReservedSteps));
     OpenOrThrow(robot.tum_estimate, out / "trajectories" / (r.id + "_estimate.tum"));
     OpenOrThrow(robot.tum_truth, out / "trajectories" / (r.id + "_truth.tum"));
     OpenOrThrow(robot.tum_final, out / "trajectories" / (r.id + "_final.tum"));
@@ -94,7 +98,7 @@ void RunEvaluator::AddTruth(const common::GroundTruth& truth, std::int64_t writt
   for (const auto& rt : truth.robots) {
     const auto robot = robots_.find(rt.id);
     if (robot == robots_.end()) continue;
-    robot->second.truth_own[step] = TruthInOwnFrame(rt.pose, robot->second.frame);
+    robot->second.truth_own.Set(step, TruthInOwnFrame(rt.pose, robot->second.frame));
     for (const auto& l : truth.landmarks) {
       if (InLidarReach(scenario_.sensors.lidar, rt.pose, l.pose.Translation()))
         robot->second.reached.insert(std::stoi(l.id));
@@ -153,6 +157,7 @@ std::string RunEvaluator::Missing() const {
 
 std::size_t RunEvaluator::Pending() const {
   std::size_t n = truth_.size() + timing_.Held();
+
   for (const auto& [id, robot] : robots_) n += robot.pending.size() + robot.odometry.size();
   return n;
 }
@@ -286,9 +291,9 @@ double RunEvaluator::ScoreFinalTrajectory(const std::string& id, RobotRun* robot
   std::size_t n = 0;
   for (const auto& [chunk, poses] : robot->final_chunks) {
     for (const auto& p : poses) {
-      const auto truth = robot->truth_own.find(p.step);
-      if (truth == robot->truth_own.end()) continue;
-      sum += (p.pose.Translation() - truth->second.Translation()).squaredNorm();
+      const common::Pose2* truth = robot->truth_own.Find(p.step);
+      if (truth == nullptr) continue;
+      sum += (p.pose.Translation() - truth->Translation()).squaredNorm();
       ++n;
       robot->tum_final << TumLine(p.time_s, p.pose);
     }

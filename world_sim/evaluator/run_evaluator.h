@@ -18,6 +18,7 @@
 #include "world_sim/evaluator/metrics.h"
 #include "world_sim/evaluator/robot_estimate.h"
 #include "world_sim/evaluator/robot_scorer.h"
+#include "world_sim/evaluator/truth_path.h"
 
 namespace mrslam::evaluator {
 
@@ -85,9 +86,9 @@ class RunEvaluator {
     // What the agent's estimator held (RobotEstimate::estimator_bytes): at the newest step scored,
     // and the most over the run.
     std::uint64_t estimator_bytes_final = 0, estimator_bytes_max = 0;
-    std::set<int> reached;                             // true landmarks ever within its reach
-    std::map<std::uint32_t, common::Pose2> truth_own;  // its true pose in G_i by step
-    double online_sum_sq = 0.0;                        // its online path as a final trajectory
+    std::set<int> reached;       // true landmarks ever within its reach
+    TruthPath truth_own;         // its true pose in G_i by step
+    double online_sum_sq = 0.0;  // its online path as a final trajectory
     std::size_t online_count = 0;
     std::map<std::uint32_t, std::vector<FinalPose>> final_chunks;
     std::ofstream tum_estimate, tum_truth, tum_final;
