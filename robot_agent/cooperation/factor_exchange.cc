@@ -98,11 +98,14 @@ std::uint32_t FactorExchange::Held(const std::string& origin) const {
 std::size_t FactorExchange::HeldBytes() const {
   std::size_t bytes = 0;
   for (const auto& [origin, log] : logs_) {
-    bytes += filters::ElementBytes(log.steps);
-    for (const auto& s : log.steps) {
-      bytes += filters::ElementBytes(s.lidar.landmarks) + filters::ElementBytes(s.lidar.robots) +
-               filters::ElementBytes(s.odometry.segments);
+    Counted& counted = counted_[origin];
+    if (counted.steps > log.steps.size()) counted = {};
+    for (; counted.steps < log.steps.size(); ++counted.steps) {
+      const common::SensorStep& s = log.steps[counted.steps];
+      counted.bytes += filters::ElementBytes(s.lidar.landmarks) + filters::ElementBytes(s.lidar.robots) +
+                       filters::ElementBytes(s.odometry.segments);
     }
+    bytes += filters::ElementBytes(log.steps) + counted.bytes;
   }
   return bytes;
 }

@@ -100,7 +100,8 @@ class FactorExchange {
   const std::map<std::string, FactorLog>& logs() const { return logs_; }
   std::uint32_t Held(const std::string& origin) const;
   // The bytes of the steps held, every origin's (sizeof(element) * size() over their containers,
-  // as SlamFilter::EstimatorBytes counts).
+  // as SlamFilter::EstimatorBytes counts). Logs only grow at their ends, so each step is counted
+  // once, when first seen (a log that shrank, restored, is counted again).
   std::size_t HeldBytes() const;
   int gaps() const { return gaps_; }
   // Steps taken in from peers (each once), steps that came again (already held), steps sent.
@@ -111,6 +112,7 @@ class FactorExchange {
   void Io(common::Archive& ar) {
     ar(logs_, own_growing_, detected_at_, peer_holdings_, holdings_step_, sends_, session_start_, last_batch_, gaps_,
        steps_received_, steps_again_, steps_sent_);
+    if (ar.loading()) counted_.clear();
   }
 
  private:
@@ -132,6 +134,10 @@ class FactorExchange {
   AgentOptions options_;
   std::string self_;
   std::map<std::string, FactorLog> logs_;
+  struct Counted {
+    std::size_t steps = 0, bytes = 0;
+  };
+  mutable std::map<std::string, Counted> counted_;  // HeldBytes's count so far, per origin
   bool own_growing_ = true;
   std::map<std::string, std::uint32_t> detected_at_;  // per peer: the last own step detecting it
   // Per peer and origin: the count it last said it holds (of its newest batch, sent at

@@ -300,9 +300,12 @@ TEST_F(RejectedBatch, TheRecipientsOwnStepsOrRelayedOnesWhenRelayingIsOff) {
 TEST(FactorExchange, HeldBytesGrowByEachStepsContainers) {
   FactorExchange a(Options("a"));
   EXPECT_EQ(a.HeldBytes(), 0U);
-  for (std::uint32_t k = 1; k <= 10; ++k) a.RecordOwn(Step("a", k));  // one segment, one reading each
   const std::size_t per_step =
       sizeof(common::SensorStep) + sizeof(common::LandmarkDetection) + sizeof(common::OdometrySegment);
+  for (std::uint32_t k = 1; k <= 4; ++k) a.RecordOwn(Step("a", k));  // one segment, one reading each
+  EXPECT_EQ(a.HeldBytes(), 4 * per_step);
+  for (std::uint32_t k = 5; k <= 10; ++k) a.RecordOwn(Step("a", k));
+  EXPECT_EQ(a.HeldBytes(), 10 * per_step);  // the steps since the last count added
   EXPECT_EQ(a.HeldBytes(), 10 * per_step);
   std::cout << "a held step of one segment and one reading: " << per_step << " bytes\n";
 }
@@ -318,6 +321,7 @@ TEST(FactorExchange, ComesBackFromAnArchiveAsItWas) {
   EXPECT_TRUE(in.AtEnd());
   EXPECT_EQ(back.Held("a"), 6U);
   EXPECT_EQ(back.Held("b"), 6U);
+  EXPECT_EQ(back.HeldBytes(), t["b"].HeldBytes());
   // It goes on as the original does.
   t["b"].RecordOwn(Step("b", 7, {"a"}));
   back.RecordOwn(Step("b", 7, {"a"}));
