@@ -219,14 +219,6 @@ KeyframeGraph::Layout KeyframeGraph::MakeLayout(const std::vector<Var>& vars) co
   return layout;
 }
 
-std::vector<int> KeyframeGraph::ChainSteps(std::uint32_t track) const {
-  std::vector<int> steps;
-  for (auto it = movers_.lower_bound(MoverKey(track, 0)); it != movers_.end() && MoverTrack(it->first) == track; ++it) {
-    steps.push_back(MoverStep(it->first));
-  }
-  return steps;
-}
-
 // Every moving track's chain spans the keyframes from its first state (or reading) to its last
 // reading; missing states are predicted by its model from the one before, a new chain starts at
 // its first reading.

@@ -219,8 +219,6 @@ class KeyframeGraph {
   bool MoverReading(const StoredReading& r, int step) const {
     return r.inlier && moving_tracks_.count(r.z.track) > 0 && movers_.count(MoverKey(r.z.track, step)) > 0;
   }
-  // The mover states of one track, by step.
-  std::vector<int> ChainSteps(std::uint32_t track) const;
   void StartMovers();
   // Removes the states of tracks no longer moving that the prior does not hold.
   void DropStoppedChains();

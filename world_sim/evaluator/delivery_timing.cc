@@ -4,12 +4,11 @@
 #include <cmath>
 
 #include "world_sim/evaluator/metrics.h"
-#include "world_sim/evaluator/truth_path.h"
 
 namespace mrslam::evaluator {
 
-DeliveryTiming::DeliveryTiming(const std::vector<std::string>& robot_ids, std::uint32_t steps) {
-  for (const auto& id : robot_ids) robots_[id].latency_us.reserve(std::min(steps, TruthPath::kReservedSteps));
+DeliveryTiming::DeliveryTiming(const std::vector<std::string>& robot_ids) {
+  for (const auto& id : robot_ids) robots_[id];
 }
 
 void DeliveryTiming::StepWritten(std::uint32_t step, std::int64_t written_ns) {

@@ -30,9 +30,7 @@ struct DeliverySummary {
 // robot's latency stays (for the percentiles). Pure.
 class DeliveryTiming {
  public:
-  // steps: the run's length, for which each robot's latencies get their room at the start (so the
-  // long-lived buffers do not move while the run goes on); 0 when unknown.
-  explicit DeliveryTiming(const std::vector<std::string>& robot_ids, std::uint32_t steps = 0);
+  explicit DeliveryTiming(const std::vector<std::string>& robot_ids);
 
   void StepWritten(std::uint32_t step, std::int64_t written_ns);
   void SensorWritten(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns);

@@ -52,9 +52,7 @@ std::vector<std::string> RobotIds(const common::ScenarioOptions& scenario) {
 }  // namespace
 
 RunEvaluator::RunEvaluator(const common::ScenarioOptions& scenario, const std::string& out_dir)
-    : scenario_(scenario),
-      out_dir_(out_dir),
-      timing_(RobotIds(scenario), static_cast<std::uint32_t>(scenario.run.steps)) {
+    : scenario_(scenario), out_dir_(out_dir), timing_(RobotIds(scenario)) {
   const std::filesystem::path out(out_dir);
   std::filesystem::create_directories(out / "trajectories");
   OpenOrThrow(metrics_, out / "metrics.csv");
@@ -67,7 +65,6 @@ RunEvaluator::RunEvaluator(const common::ScenarioOptions& scenario, const std::s
   for (const auto& r : scenario.robots) {
     RobotRun& robot = robots_[r.id];
     robot.truth_own.SetLastStep(static_cast<std::uint32_t>(scenario.run.steps));
-    robot.step_cpu_ms.reserve(std::min(static_cast<std::uint32_t>(scenario.run.steps), TruthPath::kReservedSteps));
     OpenOrThrow(robot.tum_estimate, out / "trajectories" / (r.id + "_estimate.tum"));
     OpenOrThrow(robot.tum_truth, out / "trajectories" / (r.id + "_truth.tum"));
     OpenOrThrow(robot.tum_final, out / "trajectories" / (r.id + "_final.tum"));
