@@ -9,6 +9,7 @@
 #include "common/angles.h"
 #include "common/gaussian.h"
 #include "robot_agent/filters/map_fusion.h"
+#include "robot_agent/smoother/levenberg_marquardt.h"
 
 // How an agent cooperates (the protocol; docs/cooperation.md):
 //
@@ -496,6 +497,8 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
   smoother::BatchSmoother joint(options_,
                                 {{robot_id_, first_pose_}, {m.header.sender, common::Compose(held.t, m.first_pose)}},
                                 kinematics, options_.rendezvous.enable_from_step);
+  // Each solve ends where the cost stops falling, as the online smoother's do.
+  joint.SetRelativeCostTolerance(smoother::LeastSquares{}.min_relative_decrease);
   // Solved as it grows, so that each solve starts near its answer: after 5 steps, then whenever
   // the history has grown by a quarter (at least 5 steps), and at the end; a few dozen solves
   // for hundreds of steps.

@@ -32,32 +32,6 @@ Eigen::Vector3d Minus(const Pose2& a, const Pose2& b) {
 
 }  // namespace
 
-// Appends the rows of one whitened residual block: r (size N) and its Jacobian blocks
-// (N x 3 each, zeros kept: the pattern depends on the structure only) for the variables at the
-// given column offsets (-1: a known quantity, no column). Without Jacobian (a cost evaluation),
-// the residuals only. Fixed sizes: nothing is allocated per block.
-struct BatchSmoother::Rows {
-  bool with_jacobian = true;
-  std::vector<Eigen::Triplet<double>> jacobian;
-  std::vector<double> residual;
-
-  template <int N>
-  void Add(const Eigen::Matrix<double, N, 1>& r,
-           std::initializer_list<std::pair<int, Eigen::Matrix<double, N, 3>>> blocks) {
-    const int row = static_cast<int>(residual.size());
-    for (int i = 0; i < N; ++i) residual.push_back(r(i));
-    if (!with_jacobian) return;
-    for (const auto& [col, j] : blocks) {
-      if (col < 0) continue;
-      for (int i = 0; i < N; ++i) {
-        for (int c = 0; c < 3; ++c) {
-          jacobian.emplace_back(row + i, col + c, j(i, c));
-        }
-      }
-    }
-  }
-};
-
 BatchSmoother::BatchSmoother(const AgentOptions& options, const std::vector<RobotStart>& robots,
                              std::map<int, Kinematics> kinematics, int robot_detections_from_step, Unlisted unlisted)
     : dt_s_(options.dt_s),
@@ -248,7 +222,7 @@ int BatchSmoother::Layout::RobotCol(int r, int t) const {
   return robot_base[r] + 3 * t;
 }
 
-void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
+void BatchSmoother::BuildRows(const Layout& layout, NormalEquations* rows) const {
   const Eigen::Vector3d correction_prior(1.0, 1.0, 0.0);
   const Eigen::Vector3d correction_w(1.0 / 0.1, 1.0 / 0.1, 1.0 / 0.05);
   const Eigen::Vector3d robot_w = robot_var_.unaryExpr(&Sd).cwiseInverse();
@@ -274,20 +248,22 @@ void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
         }
         jc = -(robot_w.asDiagonal() * common::ComposeJacobianRight(previous, increment) * jc);
       }
-      rows->Add<3>(res, {{layout.RobotCol(ri, t), Eigen::Matrix3d(robot_w.asDiagonal())},
-                         {layout.RobotCol(ri, t - 1), jf},
-                         {layout.CorrectionCol(ri), jc}});
+      rows->cost += res.squaredNorm();
+      rows->Add(res, {{layout.RobotCol(ri, t), Eigen::Matrix3d(robot_w.asDiagonal())},
+                      {layout.RobotCol(ri, t - 1), jf},
+                      {layout.CorrectionCol(ri), jc}});
     }
     if (estimate_calibration_) {
-      rows->Add<3>(correction_w.asDiagonal() * (correction_prior - robot.correction),
-                   {{layout.CorrectionCol(ri), -Eigen::Matrix3d(correction_w.asDiagonal())}});
+      const Eigen::Vector3d res = correction_w.asDiagonal() * (correction_prior - robot.correction);
+      rows->cost += res.squaredNorm();
+      rows->Add(res, {{layout.CorrectionCol(ri), -Eigen::Matrix3d(correction_w.asDiagonal())}});
     }
   }
   for (const auto& [id, chain] : chains_) {
     const int base = layout.chain_col.at(id);
     // A weak prior on the first heading keeps it defined before it is observable.
     const Eigen::RowVector3d prior(0.0, 0.0, 1e-3);
-    rows->Add<1>(Eigen::Matrix<double, 1, 1>::Zero(), {{base, prior}});
+    rows->Add(Eigen::Matrix<double, 1, 1>::Zero(), {{base, prior}});
     // A unicycle step is a composition with a fixed increment (a static landmark has one state).
     const Pose2 increment = StepLandmark(Pose2{}, chain.kinematics);
     const Eigen::Vector3d& w = landmark_w;
@@ -296,7 +272,8 @@ void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
       const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], common::Compose(previous, increment));
       const Eigen::Matrix3d jf = -(w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
       const int col = base + 3 * static_cast<int>(i);
-      rows->Add<3>(res, {{col, Eigen::Matrix3d(w.asDiagonal())}, {col - 3, jf}});
+      rows->cost += res.squaredNorm();
+      rows->Add(res, {{col, Eigen::Matrix3d(w.asDiagonal())}, {col - 3, jf}});
     }
   }
   for (const Reading& z : readings_) {
@@ -311,74 +288,50 @@ void BatchSmoother::BuildRows(const Layout& layout, Rows* rows) const {
     const Eigen::Matrix<double, 2, 3> jx = -filters::MeasurementJacobianPose(p, x);
     Eigen::Matrix<double, 2, 3> jp = Eigen::Matrix<double, 2, 3>::Zero();
     jp.leftCols<2>() = -filters::MeasurementJacobianLandmark(p, x);
-    rows->Add<2>(res, {{layout.RobotCol(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
+    rows->cost += res.squaredNorm();
+    rows->Add(res, {{layout.RobotCol(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
   }
 }
 
-Eigen::SparseMatrix<double> BatchSmoother::Jacobian(const Layout& layout, Rows* rows) const {
-  BuildRows(layout, rows);
-  Eigen::SparseMatrix<double> j(static_cast<int>(rows->residual.size()), layout.cols);
-  j.setFromTriplets(rows->jacobian.begin(), rows->jacobian.end());
-  return j;
+NormalEquations BatchSmoother::Equations(const Layout& layout, bool jacobians) const {
+  NormalEquations rows(layout.cols, jacobians);
+  BuildRows(layout, &rows);
+  return rows;
+}
+
+void BatchSmoother::Apply(const Layout& layout, const Eigen::VectorXd& delta, double sign) {
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    for (int t = r == 0 ? 1 : 0; t <= Steps(static_cast<int>(r)); ++t) {
+      Pose2& x = robots_[r].path[t];
+      x = Pose2::FromVector(x.Vector() + sign * delta.segment<3>(layout.RobotCol(static_cast<int>(r), t)));
+    }
+  }
+  for (auto& [id, chain] : chains_) {
+    for (std::size_t i = 0; i < chain.states.size(); ++i) {
+      const int col = layout.chain_col.at(id) + 3 * static_cast<int>(i);
+      chain.states[i] = Pose2::FromVector(chain.states[i].Vector() + sign * delta.segment<3>(col));
+    }
+  }
+  for (std::size_t r = 0; r < robots_.size() && estimate_calibration_; ++r) {
+    robots_[r].correction += sign * delta.segment<3>(layout.CorrectionCol(static_cast<int>(r)));
+  }
 }
 
 void BatchSmoother::SolveOnce() {
   const Layout layout = MakeLayout();
-  const int cols = layout.cols;
-  auto cost = [](const Rows& rows) {
-    double c = 0.0;
-    for (const double r : rows.residual) c += r * r;
-    return c;
+  Eigen::VectorXd last;  // the step taken, put back by subtracting it
+  LeastSquares problem;
+  problem.cols = layout.cols;
+  problem.equations = [&](bool jacobians) { return Equations(layout, jacobians); };
+  problem.step = [&](const Eigen::VectorXd& delta) {
+    last = delta;
+    Apply(layout, delta, 1.0);
   };
-  auto apply = [&](const Eigen::VectorXd& delta, double sign) {
-    for (std::size_t r = 0; r < robots_.size(); ++r) {
-      for (int t = r == 0 ? 1 : 0; t <= Steps(static_cast<int>(r)); ++t) {
-        Pose2& x = robots_[r].path[t];
-        x = Pose2::FromVector(x.Vector() + sign * delta.segment<3>(layout.RobotCol(static_cast<int>(r), t)));
-      }
-    }
-    for (auto& [id, chain] : chains_) {
-      for (std::size_t i = 0; i < chain.states.size(); ++i) {
-        const int col = layout.chain_col.at(id) + 3 * static_cast<int>(i);
-        chain.states[i] = Pose2::FromVector(chain.states[i].Vector() + sign * delta.segment<3>(col));
-      }
-    }
-    for (std::size_t r = 0; r < robots_.size() && estimate_calibration_; ++r) {
-      robots_[r].correction += sign * delta.segment<3>(layout.CorrectionCol(static_cast<int>(r)));
-    }
-  };
-  double lambda = 1e-6;
-  // The pattern of H is the same at every iteration (Rows keeps structural zeros): its ordering
-  // and symbolic factorization are computed once.
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
-  for (int iteration = 0; iteration < 30; ++iteration) {
-    Rows rows;
-    const Eigen::SparseMatrix<double> j = Jacobian(layout, &rows);
-    const double before = cost(rows);
-    const Eigen::Map<const Eigen::VectorXd> r(rows.residual.data(), static_cast<int>(rows.residual.size()));
-    Eigen::SparseMatrix<double> h = j.transpose() * j;
-    const Eigen::VectorXd g = j.transpose() * r;
-    Eigen::VectorXd diag = h.diagonal();
-    for (int c = 0; c < cols; ++c) h.coeffRef(c, c) += lambda * std::max(diag(c), 1e-9);
-    if (iteration == 0) solver.analyzePattern(h);
-    solver.factorize(h);
-    // The residual is z - h(.) style (r = target - model), so the step solves H d = -J^T r.
-    const Eigen::VectorXd delta = solver.solve(-g);
-    if (solver.info() != Eigen::Success || !delta.allFinite()) break;
-    apply(delta, 1.0);
-    Rows after_rows;
-    after_rows.with_jacobian = false;  // the cost only
-    BuildRows(layout, &after_rows);
-    const double after = cost(after_rows);
-    if (after > before) {
-      apply(delta, -1.0);
-      lambda *= 10.0;
-      if (lambda > 1e6) break;
-      continue;
-    }
-    lambda = std::max(lambda / 10.0, 1e-9);
-    if (delta.cwiseAbs().maxCoeff() < 1e-7) break;
-  }
+  problem.save = [] {};
+  problem.restore = [&] { Apply(layout, last, -1.0); };
+  problem.min_relative_decrease = relative_cost_tolerance_;
+  Factorization solver;
+  LevenbergMarquardt(problem, 30, 0.0, &solver);
 }
 
 Eigen::Matrix3d BatchSmoother::FirstPoseCovariance(int r) const {
@@ -394,10 +347,7 @@ Eigen::Matrix3d BatchSmoother::PoseCovariance(int r) const {
 
 Eigen::Matrix3d BatchSmoother::PoseBlockCovariance(int r, int t) const {
   const Layout layout = MakeLayout();
-  Rows rows;
-  const Eigen::SparseMatrix<double> j = Jacobian(layout, &rows);
-  const Eigen::SparseMatrix<double> h = j.transpose() * j;
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> information(h);
+  const Factorization information(Equations(layout, true).Matrix());
   Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, 3);
   const int col = layout.RobotCol(r, t < 0 ? Steps(r) : t);
   e.block<3, 3>(col, 0).setIdentity();

@@ -11,6 +11,8 @@
 #include "common/sensor_types.h"
 #include "robot_agent/filters/odometry_calibration.h"
 #include "robot_agent/options/agent_options.h"
+#include "robot_agent/smoother/levenberg_marquardt.h"
+#include "robot_agent/smoother/normal_equations.h"
 
 namespace mrslam::robot_agent::smoother {
 
@@ -107,6 +109,13 @@ class BatchSmoother {
   void Solve();
   // Estimates each robot's odometry factors and turn-rate bias too (call before Add).
   void EstimateOdometryCalibration() { estimate_calibration_ = true; }
+  // Ends each solve once an iteration lowers the cost by less than tolerance x (1 + cost)
+  // instead of running until the largest step is below 1e-7 (tolerance 0, the default). Where
+  // the data leave a direction weakly determined, Gauss-Newton creeps along it for many
+  // iterations that barely lower the cost. Stopping there leaves the solution off the minimum by
+  // a small fraction of its uncertainty: the cost still to gain is a few times the last decrease,
+  // and a cost excess c is a Mahalanobis distance sqrt(c) from the minimum.
+  void SetRelativeCostTolerance(double tolerance) { relative_cost_tolerance_ = tolerance; }
   // Robot r's (s_v, s_w, b_w): (1, 1, 0) unless estimated.
   const Eigen::Vector3d& OdometryCorrection(int r) const { return robots_.at(r).correction; }
   // Robot r of the set (0: the first): its current pose and its first pose, in the frame.
@@ -182,10 +191,13 @@ class BatchSmoother {
     int CorrectionCol(int r) const { return correction_base < 0 ? -1 : correction_base + 3 * r; }
   };
   Layout MakeLayout() const;
-  // The whitened residual rows of every factor at the current estimate, and their Jacobian.
-  struct Rows;
-  void BuildRows(const Layout& layout, Rows* rows) const;
-  Eigen::SparseMatrix<double> Jacobian(const Layout& layout, Rows* rows) const;
+  // The normal equations of every factor's whitened residual at the current estimate (the cost
+  // only without jacobians); the Jacobian's pattern, structural zeros kept, depends on the
+  // structure only, so the ordering of H is computed once per solve.
+  void BuildRows(const Layout& layout, NormalEquations* rows) const;
+  NormalEquations Equations(const Layout& layout, bool jacobians) const;
+  // The unknowns moved by sign * delta.
+  void Apply(const Layout& layout, const Eigen::VectorXd& delta, double sign);
   // A reading's target (landmark or robot position) and its residual z - h, whitened, at the
   // current solution.
   Eigen::Vector2d Target(const Reading& z) const;
@@ -200,6 +212,7 @@ class BatchSmoother {
   FilterOptions filter_;  // the odometry calibration and the outlier gate
   Unlisted unlisted_;
   bool estimate_calibration_ = false;
+  double relative_cost_tolerance_ = 0.0;
   Eigen::Vector3d robot_var_, landmark_var_;
   double var_r_, var_b_;
   int robot_detections_from_step_;

@@ -2,8 +2,8 @@
 //  - BM_JointSmoother/K: the batch smoother's work in Cooperation::JointTransform for two
 //    histories of K steps of paper_two_robots.yaml (both robots' odometry, landmark readings
 //    labelled by the landmarks' identities, mutual detections from rendezvous.enable_from_step
-//    on): every step added, solved after 5 steps, then whenever the history has grown by a
-//    quarter (at least 5 steps), and at the end; then the second robot's first-pose covariance.
+//    on): every step added, each solve ending where the cost stops falling, solved after 5 steps, then whenever the
+//    history has grown by a quarter (at least 5 steps), and at the end; then the second robot's first-pose covariance.
 #include <map>
 #include <memory>
 #include <string>
@@ -14,6 +14,7 @@
 #include "common/config/agent_options_projection.h"
 #include "common/config/scenario_options.h"
 #include "robot_agent/smoother/batch_smoother.h"
+#include "robot_agent/smoother/levenberg_marquardt.h"
 #include "world_sim/source/step_source_factory.h"
 
 namespace mrslam::robot_agent::smoother {
@@ -38,6 +39,7 @@ void BM_JointSmoother(benchmark::State& state) {
                                                          {o.robots[1].id, o.robots[1].initial_pose}};
   for (auto _ : state) {
     BatchSmoother joint(options, starts, kinematics, options.rendezvous.enable_from_step);
+    joint.SetRelativeCostTolerance(LeastSquares{}.min_relative_decrease);
     std::size_t next_solve = 5;
     for (std::size_t t = 0; t < history.size(); ++t) {
       joint.Add(history[t]);
