@@ -50,6 +50,7 @@ constexpr auto kStopGrace = std::chrono::seconds(5);
 // Once world_sim has finished, the agents and the evaluator must finish within this time.
 constexpr auto kDrainTimeout = std::chrono::seconds(120);
 constexpr auto kPlotTimeout = std::chrono::seconds(300);
+constexpr auto kEvaluatorJoinTimeout = std::chrono::seconds(20);
 constexpr int kLogTailLines = 15;
 constexpr int kPlotScriptMissingMatplotlib = 3;  // plot_run.py's exit code when it cannot plot
 
@@ -208,6 +209,29 @@ void RemoveShmFiles(int domain) {
   }
 }
 
+// Starts the evaluator and waits until it is in the domain (the monitor sees it), before the others:
+// it is not part of the lockstep barrier, so a short run could otherwise end (and its writers go
+// away) before it joins. Returns false, reported, if the evaluator ended first.
+bool StartEvaluator(ProcessSupervisor* children, const RunArgs& run, ProgressMonitor* monitor, const std::string& dir,
+                    const std::atomic<bool>& stop) {
+  children->Start("evaluator", ChildCommand(run, "evaluator", {"--out", dir}), dir + "/logs/evaluator.log");
+  if (!monitor) return true;
+  const auto deadline = Clock::now() + kEvaluatorJoinTimeout;
+  while (!monitor->HasSeenParticipant("evaluator") && Clock::now() < deadline && !stop) {
+    const auto ended = children->Reap();
+    if (!ended.empty()) {  // the evaluator ended before the run began
+      ReportFailure(ended.front(), "");
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  if (!monitor->HasSeenParticipant("evaluator") && !stop) {
+    std::cerr << kName << ": warning: the evaluator has not joined DDS domain " << run.domain << " after "
+              << FormatSeconds(Seconds(kEvaluatorJoinTimeout)) << "; starting the others anyway\n";
+  }
+  return true;
+}
+
 // The run's wall time and the CPU time of all its processes (the launcher's included).
 struct RunCost {
   double wall_s = 0.0;
@@ -311,7 +335,7 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   const double cpu_start = common::ProcessTreeCpuSeconds();
   std::vector<std::string> robot_ids;
   for (const auto& r : scenario.robots) robot_ids.push_back(r.id);
-  // The monitor joins first: the agents wait for its estimate readers, and it sees the viewer join.
+  // The monitor joins first, to see the evaluator join.
   std::unique_ptr<ProgressMonitor> monitor;
   try {
     monitor =
@@ -320,16 +344,14 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     std::cerr << kName << ": warning: no progress display (" << e.what() << ")\n";
   }
   ProcessSupervisor children;
-  // The evaluator is not part of the lockstep barrier, yet it misses nothing: world_sim waits for
-  // its truth reader and each agent for its estimate reader before step 1.
-  children.Start("evaluator", ChildCommand(run, "evaluator", {"--out", dir}), dir + "/logs/evaluator.log");
+  if (!StartEvaluator(&children, run, monitor.get(), dir, stop)) return kFailed;
   std::unique_ptr<RunViewer> viewer;
   int view_readers = 0;
   if (flags.view_port) {
     viewer = std::make_unique<RunViewer>(run, *flags.view_port, dir + "/logs/mrslam_view.log");
     view_readers = viewer->Join(monitor.get(), stop);
   }
-  if (stop) {  // interrupted before the simulation started (or while the viewer joined): start nothing more
+  if (stop) {  // interrupted while the evaluator (or the viewer) joined: start nothing more
     std::cerr << kName << ": interrupted: stopping " << JoinNames(children.RunningNames()) << "\n";
     children.StopAll(kStopGrace);
     return kStopped;
