@@ -575,9 +575,15 @@ void KeyframeGraph::ComputeCovariances() {
     offset[v] = rhs;
     rhs += Dim(v);
   }
-  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(layout.cols, rhs);
-  for (const Var& v : wanted) e.block(layout.Col(v), offset[v], Dim(v), Dim(v)).setIdentity();
-  const Eigen::MatrixXd x = information.solve(e);
+  // With P H P^T = L D L^T, H^-1 = P^T L^-T D^-1 L^-1 P, so the block of H^-1 at (a, b) is
+  // Y_a^T D^-1 Y_b with Y = L^-1 P E, E the identity's columns of the wanted variables: a
+  // forward substitution only, which skips the columns of L above the first nonzero of the
+  // right-hand side (the wanted variables tend to be eliminated late).
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(layout.cols, rhs);
+  for (const Var& v : wanted) y.block(layout.Col(v), offset[v], Dim(v), Dim(v)).setIdentity();
+  y = information.permutationP() * y;
+  information.matrixL().solveInPlace(y);
+  const Eigen::VectorXd d_inverse = information.vectorD().cwiseInverse();
   std::map<std::uint32_t, Eigen::Matrix2d> kept;
   for (const Var& v : vars) {
     const auto it = landmark_cov_.find(static_cast<std::uint32_t>(v.key));
@@ -585,8 +591,10 @@ void KeyframeGraph::ComputeCovariances() {
   }
   landmark_cov_ = std::move(kept);
   mover_cov_.clear();
-  if (information.info() != Eigen::Success || !x.allFinite()) return;
-  auto block = [&](const Var& a, const Var& b) { return x.block(layout.Col(a), offset[b], Dim(a), Dim(b)); };
+  if (information.info() != Eigen::Success || !y.allFinite() || !d_inverse.allFinite()) return;
+  auto block = [&](const Var& a, const Var& b) -> Eigen::MatrixXd {
+    return y.middleCols(offset[a], Dim(a)).transpose() * d_inverse.asDiagonal() * y.middleCols(offset[b], Dim(b));
+  };
   const Var pose{Var::kPose, window_.back().step}, correction{Var::kCorrection, 0};
   pose_correction_cov_.setZero();
   pose_correction_cov_.bottomRightCorner<3, 3>() = block(correction, correction);
