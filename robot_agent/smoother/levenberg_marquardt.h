@@ -6,11 +6,13 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include "robot_agent/smoother/block_ordering.h"
 #include "robot_agent/smoother/normal_equations.h"
 
 namespace mrslam::robot_agent::smoother {
 
-using Factorization = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>;
+// LDL^T with the fill-reducing ordering of the variables (block_ordering.h).
+using Factorization = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, BlockAmdOrdering>;
 
 // A least-squares problem as Levenberg-Marquardt sees it: its normal equations at the current
 // values (only the cost without jacobians), and the values moved by a step, kept or put back.
