@@ -238,7 +238,7 @@ void BatchSmoother::BuildRows(const Layout& layout, NormalEquations* rows) const
       const Eigen::Matrix3d jf = -(robot_w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
       // d increment / d correction by central differences; then through the composition.
       Eigen::Matrix3d jc = Eigen::Matrix3d::Zero();
-      if (estimate_calibration_) {
+      if (estimate_calibration_ && rows->jacobians) {
         constexpr double kH = 1e-6;
         for (int c = 0; c < 3; ++c) {
           Eigen::Vector3d d = Eigen::Vector3d::Zero();
@@ -248,15 +248,13 @@ void BatchSmoother::BuildRows(const Layout& layout, NormalEquations* rows) const
         }
         jc = -(robot_w.asDiagonal() * common::ComposeJacobianRight(previous, increment) * jc);
       }
-      rows->cost += res.squaredNorm();
-      rows->Add(res, {{layout.RobotCol(ri, t), Eigen::Matrix3d(robot_w.asDiagonal())},
-                      {layout.RobotCol(ri, t - 1), jf},
-                      {layout.CorrectionCol(ri), jc}});
+      rows->AddSquared(res, {{layout.RobotCol(ri, t), Eigen::Matrix3d(robot_w.asDiagonal())},
+                             {layout.RobotCol(ri, t - 1), jf},
+                             {layout.CorrectionCol(ri), jc}});
     }
     if (estimate_calibration_) {
       const Eigen::Vector3d res = correction_w.asDiagonal() * (correction_prior - robot.correction);
-      rows->cost += res.squaredNorm();
-      rows->Add(res, {{layout.CorrectionCol(ri), -Eigen::Matrix3d(correction_w.asDiagonal())}});
+      rows->AddSquared(res, {{layout.CorrectionCol(ri), -Eigen::Matrix3d(correction_w.asDiagonal())}});
     }
   }
   for (const auto& [id, chain] : chains_) {
@@ -272,8 +270,7 @@ void BatchSmoother::BuildRows(const Layout& layout, NormalEquations* rows) const
       const Eigen::Vector3d res = w.asDiagonal() * Minus(chain.states[i], common::Compose(previous, increment));
       const Eigen::Matrix3d jf = -(w.asDiagonal() * common::ComposeJacobianLeft(previous, increment));
       const int col = base + 3 * static_cast<int>(i);
-      rows->cost += res.squaredNorm();
-      rows->Add(res, {{col, Eigen::Matrix3d(w.asDiagonal())}, {col - 3, jf}});
+      rows->AddSquared(res, {{col, Eigen::Matrix3d(w.asDiagonal())}, {col - 3, jf}});
     }
   }
   for (const Reading& z : readings_) {
@@ -288,8 +285,8 @@ void BatchSmoother::BuildRows(const Layout& layout, NormalEquations* rows) const
     const Eigen::Matrix<double, 2, 3> jx = -filters::MeasurementJacobianPose(p, x);
     Eigen::Matrix<double, 2, 3> jp = Eigen::Matrix<double, 2, 3>::Zero();
     jp.leftCols<2>() = -filters::MeasurementJacobianLandmark(p, x);
-    rows->cost += res.squaredNorm();
-    rows->Add(res, {{layout.RobotCol(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
+    rows->AddSquared(res,
+                     {{layout.RobotCol(z.robot, z.step), z_w.asDiagonal() * jx}, {target_col, z_w.asDiagonal() * jp}});
   }
 }
 

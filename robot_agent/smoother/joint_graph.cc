@@ -284,8 +284,7 @@ void JointGraph::AddObservationRows(int r, NormalEquations* rows) const {
 
 void JointGraph::AddCorrectionPrior(int r, NormalEquations* rows) const {
   const Eigen::Vector3d res = prior_w_.cwiseProduct(robots_[r].correction - Eigen::Vector3d(1.0, 1.0, 0.0));
-  rows->cost += res.squaredNorm();
-  if (rows->jacobians) rows->Add(res, {{robots_[r].correction_col, Eigen::Matrix3d(prior_w_.asDiagonal())}});
+  rows->AddSquared(res, {{robots_[r].correction_col, Eigen::Matrix3d(prior_w_.asDiagonal())}});
 }
 
 NormalEquations JointGraph::Equations(bool jacobians) const {

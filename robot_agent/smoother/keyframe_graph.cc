@@ -321,8 +321,7 @@ void KeyframeGraph::AddMoverRows(const Layout& layout, std::uint32_t track, int 
   e(2) = WrapAngle(e(2));
   const Eigen::Matrix3d w = MoverWhitening(model->second, to_step - from_step);
   const Eigen::Vector3d r = w * e;
-  rows->cost += r.squaredNorm();
-  rows->Add(r, {{layout.Col(a), w * between.ja}, {layout.Col(b), w * between.jb}});
+  rows->AddSquared(r, {{layout.Col(a), w * between.ja}, {layout.Col(b), w * between.jb}});
 }
 
 void KeyframeGraph::BuildRows(const Layout& layout, int oldest, Rows* rows) const {
@@ -345,8 +344,7 @@ void KeyframeGraph::BuildRows(const Layout& layout, int oldest, Rows* rows) cons
       Rows::Block j = Rows::Block::Zero(1, 3);
       j(0, 2) = 1e-3;
       const Rows::Residual r = Rows::Residual::Constant(1, 1e-3 * WrapAngle(state.heading - chain_starts_.at(key)));
-      rows->cost += r.squaredNorm();
-      rows->Add(r, {{layout.Col({Var::kMover, key}), j}});
+      rows->AddSquared(r, {{layout.Col({Var::kMover, key}), j}});
     }
   }
 }

@@ -36,6 +36,11 @@ struct NormalEquations {
       }
     }
   }
+  // A plain least-squares block: its cost |r|^2 and its normal equations.
+  void AddSquared(const Residual& r, std::initializer_list<std::pair<int, Block>> blocks) {
+    cost += r.squaredNorm();
+    Add(r, blocks);
+  }
   // H's lower triangle (for a solver that reads only that, or selfadjointView<Lower>).
   Eigen::SparseMatrix<double> Matrix() const {
     Eigen::SparseMatrix<double> out(static_cast<int>(g.size()), static_cast<int>(g.size()));
