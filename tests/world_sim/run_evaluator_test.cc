@@ -242,6 +242,33 @@ TEST_F(RunEvaluatorTest, TheOrderInWhichDataArriveDoesNotChangeTheScores) {
   EXPECT_GT(in_order["robots"]["r1"]["dead_reckoning_rmse_m"].get<double>(), 1.0);
 }
 
+// A reader that falls too far behind loses the steps dropped from the writer's history; each
+// stream still comes in order, so once every stream's last step is in, the run is complete and
+// scored without them, and the loss is counted instead of waited for.
+TEST_F(RunEvaluatorTest, StepsLostFromAStreamAreCountedNotWaitedFor) {
+  scenario_.run.steps = 20;
+  RunEvaluator evaluator(scenario_, out_dir_);
+  for (std::uint32_t step = 0; step <= 20; ++step) {
+    const StillStep s = StillAt(step);
+    if (step != 7 && step != 8) evaluator.AddTruth(s.truth);
+    if (step > 0 && step != 12) evaluator.AddOdometry("r1", s.odometry);
+    if (step > 0) evaluator.AddOdometry("r2", s.odometry);
+    if (step != 3) evaluator.AddEstimate("r1", s.r1);
+    evaluator.AddEstimate("r2", s.r2);
+    if (step < 20) {
+      EXPECT_FALSE(evaluator.Complete()) << step;
+    }
+  }
+  ASSERT_TRUE(evaluator.Complete()) << evaluator.Missing();
+  EXPECT_EQ(evaluator.TruthStepsLost(), 2U);
+  const nlohmann::json summary = evaluator.Finish(0.0);
+  EXPECT_EQ(summary["truth_steps_lost"].get<int>(), 2);
+  EXPECT_EQ(summary["robots"]["r1"]["odometry_steps_lost"].get<int>(), 1);
+  EXPECT_EQ(summary["robots"]["r2"]["odometry_steps_lost"].get<int>(), 0);
+  EXPECT_EQ(summary["robots"]["r1"]["steps_scored"].get<int>(), 18);  // not step 3, nor 7 and 8
+  EXPECT_EQ(summary["robots"]["r2"]["steps_scored"].get<int>(), 19);
+}
+
 // Taken() counts what is new only: a sample sent again (a replayed history) does not make it
 // grow, so the evaluator's bound on a run that is gone is not reset by replays.
 TEST_F(RunEvaluatorTest, TakenGrowsWithNewMessagesOnlyNotWithReplays) {

@@ -123,6 +123,10 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
     if (notifier.Wait(&seen, std::chrono::milliseconds(100))) std::this_thread::sleep_for(kGather);
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+  if (evaluator.TruthStepsLost() > 0) {
+    spdlog::warn("{} steps' truth did not come (the evaluator fell behind world_sim's history): scored without them",
+                 evaluator.TruthStepsLost());
+  }
   const auto summary = evaluator.Finish(wall);
   for (const auto& [id, r] : summary["robots"].items()) {
     spdlog::info("{}: position RMSE {:.3f} m, heading RMSE {:.2f} deg, landmark RMSE {:.3f} m, dead reckoning {:.3f} m",

@@ -138,10 +138,12 @@ bool RunEvaluator::Complete() const { return Missing().empty(); }
 
 std::string RunEvaluator::Missing() const {
   const auto last = static_cast<std::uint32_t>(scenario_.run.steps);
-  if (truth_steps_ < last + 1) return fmt::format("truth: {} of {} steps", truth_steps_, last + 1);
+  // Each stream comes in order (one DDS writer, reliable): once its last step is in, a step not
+  // in yet was dropped from the writer's history and will not come.
+  if (truth_steps_ == 0 || newest_truth_ < last) return fmt::format("truth: {} of {} steps", truth_steps_, last + 1);
   for (const auto& [id, robot] : robots_) {
     if (!robot.last_step_in) return fmt::format("{}: estimates of {} of {} steps", id, robot.estimates, last);
-    if (robot.odometry_steps < last) {
+    if (robot.odometry_steps == 0 || robot.newest_odometry < last) {
       return fmt::format("{}: odometry of {} of {} steps", id, robot.odometry_steps, last);
     }
     if (robot.final_chunks.size() < robot.final_chunks_announced) {
@@ -150,6 +152,11 @@ std::string RunEvaluator::Missing() const {
     }
   }
   return {};
+}
+
+std::size_t RunEvaluator::TruthStepsLost() const {
+  const auto all = static_cast<std::size_t>(scenario_.run.steps) + 1;
+  return all - std::min(truth_steps_, all);
 }
 
 std::size_t RunEvaluator::Pending() const {
@@ -259,6 +266,7 @@ nlohmann::json RunEvaluator::Finish(double wall_seconds) {
   summary["seed"] = scenario_.seed;
   summary["steps"] = scenario_.run.steps;
   summary["wall_seconds"] = wall_seconds;
+  summary["truth_steps_lost"] = TruthStepsLost();
   summary["robots"] = nlohmann::json::object();
   for (const auto& r : scenario_.robots) {
     RobotRun& robot = robots_.at(r.id);
@@ -326,6 +334,8 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["union_completeness"] =
       union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
   r["steps_scored"] = s.steps_scored;
+  const auto odometry_steps = static_cast<std::size_t>(scenario_.run.steps);  // steps 1..N
+  r["odometry_steps_lost"] = odometry_steps - std::min(robot.odometry_steps, odometry_steps);
   r["step_cpu_ms_median"] = robot.step_cpu_ms.empty() ? 0.0 : Median(robot.step_cpu_ms);
   r["step_cpu_ms_p99"] = robot.step_cpu_ms.empty() ? 0.0 : Percentile(robot.step_cpu_ms, 99.0);
   // Per simulated second of the steps the agent went through.

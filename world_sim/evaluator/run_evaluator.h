@@ -53,9 +53,13 @@ class RunEvaluator {
   // A chunk (0..chunks-1) of a robot's final trajectory.
   void AddFinalTrajectory(const std::string& robot_id, std::uint32_t chunk, std::vector<FinalPose> poses);
 
-  // True once the truth of steps 0..N, every robot's estimate of step N and every final
-  // trajectory it announced are in.
+  // True once the truth, every robot's estimate and odometry of the last step N and every final
+  // trajectory chunk announced are in. Steps lost before them (dropped from a writer's history
+  // when a reader fell too far behind) are not waited for: they are counted (TruthStepsLost, the
+  // summary's *_lost figures) and the run is scored without them.
   bool Complete() const;
+  // Truth steps of 0..N that did not come.
+  std::size_t TruthStepsLost() const;
   // What is still missing (for a timeout message).
   std::string Missing() const;
   // How many distinct messages were taken in so far: it grows only with something new, not with a
