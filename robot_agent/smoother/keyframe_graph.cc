@@ -439,6 +439,8 @@ void KeyframeGraph::Io(common::Archive& ar) {
   if (window_.empty()) throw common::ArchiveError("archive: a keyframe graph without keyframes");
   information_ = nullptr;  // a factorization of the last solve: that solve's own
   information_vars_.clear();
+  history_bytes_ = 0;
+  for (const Keyframe& kf : history_) history_bytes_ += HeldBytes(kf);
 }
 
 std::size_t KeyframeGraph::KeyframeBytes(int steps, int segments, int readings) {
@@ -447,29 +449,30 @@ std::size_t KeyframeGraph::KeyframeBytes(int steps, int segments, int readings) 
          static_cast<std::size_t>(readings) * sizeof(StoredReading);
 }
 
+std::size_t KeyframeGraph::MotionBytes(const std::vector<std::vector<Motion>>& steps) {
+  std::size_t bytes = filters::ElementBytes(steps);
+  for (const auto& segments : steps) bytes += filters::ElementBytes(segments);
+  return bytes;
+}
+
+std::size_t KeyframeGraph::HeldBytes(const Keyframe& kf) {
+  return sizeof(Keyframe) + MotionBytes(kf.steps) + filters::ElementBytes(kf.readings);
+}
+
 std::size_t KeyframeGraph::EstimatorBytes() const {
-  const auto motion_bytes = [](const std::vector<std::vector<Motion>>& steps) {
-    std::size_t bytes = filters::ElementBytes(steps);
-    for (const auto& segments : steps) bytes += filters::ElementBytes(segments);
-    return bytes;
-  };
-  const auto keyframe_bytes = [&](const Keyframe& kf) {
-    return sizeof(Keyframe) + motion_bytes(kf.steps) + filters::ElementBytes(kf.readings);
-  };
   const auto prior_bytes = [](const Prior& p) {
     std::size_t bytes = filters::ElementBytes(p.vars) + filters::ElementBytes(p.x0) +
                         sizeof(double) * static_cast<std::size_t>(p.h.size() + p.g.size());
     for (const auto& x0 : p.x0) bytes += sizeof(double) * static_cast<std::size_t>(x0.size());
     return bytes;
   };
-  std::size_t bytes = motion_bytes(pending_) + filters::ElementBytes(landmarks_) +
+  std::size_t bytes = MotionBytes(pending_) + filters::ElementBytes(landmarks_) +
                       filters::ElementBytes(static_tracks_) + filters::ElementBytes(mover_models_) +
                       filters::ElementBytes(moving_tracks_) + filters::ElementBytes(movers_) +
                       filters::ElementBytes(chain_starts_) + prior_bytes(prior_) + prior_bytes(calibration_prior_) +
                       filters::ElementBytes(landmark_cov_) + filters::ElementBytes(mover_cov_);
-  for (const Keyframe& kf : window_) bytes += keyframe_bytes(kf);
-  for (const Keyframe& kf : history_) bytes += keyframe_bytes(kf);
-  return bytes;
+  for (const Keyframe& kf : window_) bytes += HeldBytes(kf);
+  return bytes + history_bytes_;
 }
 
 void KeyframeGraph::Solve() {
@@ -526,6 +529,7 @@ void KeyframeGraph::MarginalizeOldest(int count) {
     chain_starts_.erase(vars[i].key);
   }
   for (int i = 0; i < count; ++i) {
+    history_bytes_ += HeldBytes(window_.front());
     history_.push_back(std::move(window_.front()));
     window_.pop_front();
   }
@@ -665,6 +669,7 @@ KeyframeGraph KeyframeGraph::Whole() const {
   KeyframeGraph all(*this);
   all.window_.insert(all.window_.begin(), history_.begin(), history_.end());
   all.history_.clear();
+  all.history_bytes_ = 0;
   for (auto& kf : all.window_) kf.has_odometry = !kf.fixed && !kf.odometry_cut;
   all.prior_ = calibration_prior_;
   all.window_keyframes_ = std::numeric_limits<int>::max();

@@ -214,6 +214,9 @@ class KeyframeGraph {
   static int MoverStep(std::int64_t key) { return static_cast<int>(key & 0xffffffff); }
 
   static int Dim(const Var& v) { return v.kind == Var::kLandmark ? 2 : 3; }
+  // EstimatorBytes' parts: motion per step, and one keyframe (KeyframeBytes).
+  static std::size_t MotionBytes(const std::vector<std::vector<Motion>>& steps);
+  static std::size_t HeldBytes(const Keyframe& kf);
   common::Pose2 MoverIncrement(const MoverModel& model, int steps) const;
   Eigen::Matrix3d MoverWhitening(const MoverModel& model, int steps) const;
   bool MoverReading(const StoredReading& r, int step) const {
@@ -273,6 +276,7 @@ class KeyframeGraph {
   Eigen::Vector2d z_w_;
   std::deque<Keyframe> window_;
   std::vector<Keyframe> history_;             // the marginalized keyframes, as they left
+  std::size_t history_bytes_ = 0;             // HeldBytes summed over history_
   std::vector<std::vector<Motion>> pending_;  // the motion since the last keyframe
   std::map<std::uint32_t, Eigen::Vector2d> landmarks_;
   std::set<std::uint32_t> static_tracks_;
