@@ -134,12 +134,16 @@ void OnlineSmoother::CheckLost(int step) {
     return;
   }
   if (lost_keyframes_++ == 0) lost_since_step_ = step;
-  if (lost_keyframes_ >= o.lost_after_keyframes) {
-    // Found again or not, the held landmarks are let in.
-    recoveries_ += Recover(now) ? 1 : 0;
-    lost_keyframes_ = 0;
-    lost_since_step_ = -1;
+  if (lost_keyframes_ < o.lost_after_keyframes) return;
+  // Searched again at every suspect keyframe from then on, as the view brings more of the map
+  // in; found, or still not after as many keyframes again, the held landmarks are let in.
+  if (Recover(now)) {
+    ++recoveries_;
+  } else if (lost_keyframes_ < 2 * o.lost_after_keyframes) {
+    return;
   }
+  lost_keyframes_ = 0;
+  lost_since_step_ = -1;
 }
 
 bool OnlineSmoother::Recover(const Support& now) {

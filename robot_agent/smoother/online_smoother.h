@@ -33,7 +33,8 @@ namespace mrslam::robot_agent::smoother {
 // the readings, and more than at the current pose) is taken: the keyframes since the trouble
 // began are moved by it, the odometry factor into the first of them is cut (the robot moved in a
 // way its odometry did not see), their readings are relabelled by the pose's associations, and
-// the front end is reseated there.
+// the front end is reseated there. Not found, the search is made again at each further suspect
+// keyframe, up to lost_after_keyframes more, before the landmarks held out are let in.
 class OnlineSmoother : public filters::SlamFilter {
  public:
   OnlineSmoother(const AgentOptions& options, std::uint64_t seed);

@@ -78,6 +78,17 @@ TEST(OnlineSmoother, FindsItsPoseAgainAfterASlip) {
   EXPECT_LT(e.heading_rad.back(), common::RadFromDeg(5.0));
 }
 
+TEST(OnlineSmoother, SearchesAgainWhenTheFirstSearchFindsTooLittle) {
+  // Seed 3: at the first search the view holds two mapped landmarks of four readings, too little
+  // to take a pose; the next keyframe's view has three, and there the pose is found.
+  const auto o = common::LoadScenario(Config("slip.yaml"), {"filter.type=smoother", "seed=3"});
+  const Errors e = RunR1(o);
+  EXPECT_EQ(e.recoveries, 1);
+  EXPECT_GT(*std::max_element(e.heading_rad.begin() + 82, e.heading_rad.begin() + 87), common::RadFromDeg(20.0));
+  EXPECT_LT(e.position_m.back(), 0.3);
+  EXPECT_LT(e.heading_rad.back(), common::RadFromDeg(5.0));
+}
+
 // What the smoother holds grows with the keyframes it marginalizes, each kept whole in the fixed
 // history for the final trajectory, and with little else once its map is complete. Eight static
 // landmarks around a circle (every step a keyframe: one step of one odometry segment and the
