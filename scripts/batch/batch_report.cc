@@ -17,8 +17,16 @@ double Metric(const RobotRun& r, int i) {
       return r.heading_rmse_deg;
     case 2:
       return r.landmark_rmse_m;
-    default:
+    case 3:
       return r.dead_reckoning_rmse_m;
+    case 4:
+      return r.static_landmark_rmse_m;
+    case 5:
+      return r.moving_landmark_rmse_m;
+    case 6:
+      return r.moving_completeness;
+    default:
+      return r.mean_nees;
   }
 }
 

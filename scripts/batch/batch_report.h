@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <iterator>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -18,10 +19,17 @@ struct RobotRun {
   double heading_rmse_deg = 0.0;
   double landmark_rmse_m = 0.0;
   double dead_reckoning_rmse_m = 0.0;
+  double static_landmark_rmse_m = 0.0;
+  double moving_landmark_rmse_m = 0.0;
+  double moving_completeness = 0.0;
+  double mean_nees = 0.0;
 };
 
-inline constexpr const char* kMetricNames[] = {"position_rmse_m", "heading_rmse_deg", "landmark_rmse_m",
-                                               "dead_reckoning_rmse_m"};
+// The names of summary.json (docs/metrics.md).
+inline constexpr const char* kMetricNames[] = {
+    "position_rmse_m",        "heading_rmse_deg",       "landmark_rmse_m",     "dead_reckoning_rmse_m",
+    "static_landmark_rmse_m", "moving_landmark_rmse_m", "moving_completeness", "mean_nees"};
+inline constexpr int kNumMetrics = static_cast<int>(std::size(kMetricNames));
 // The figure kMetricNames[i] of r.
 double Metric(const RobotRun& r, int i);
 

@@ -115,7 +115,8 @@ std::vector<RobotRun> RunSeed(const common::ScenarioOptions& options, std::uint6
   };
   std::vector<RobotRun> out;
   for (const evaluator::RobotSummary& s : ScoreSeed(options, seed, estimators, progress ? observer : StepObserver{})) {
-    out.push_back({s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m});
+    out.push_back({s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m,
+                   s.static_landmark_rmse_m, s.moving_landmark_rmse_m, s.moving_completeness, s.mean_nees});
   }
   return out;
 }
@@ -178,7 +179,7 @@ int PrintFilterAccuracy(const common::ScenarioOptions& options, std::uint64_t fi
   std::printf("%-6s %-24s %10s %10s\n", "robot", "metric", "median", "p90");
   for (std::size_t i = 0; i < options.robots.size(); ++i) {
     const std::string& id = options.robots[i].id;
-    for (int m = 0; m < 4; ++m) {
+    for (int m = 0; m < kNumMetrics; ++m) {
       std::vector<double> values;
       values.reserve(results.size());
       for (const auto& r : results) values.push_back(Metric(r[i], m));
