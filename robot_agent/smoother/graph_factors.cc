@@ -50,19 +50,15 @@ OdometryIncrementJacobians OdometryIncrementWithJacobian(const std::vector<std::
   return out;
 }
 
-OdometryFactor OdometryResidual(const Pose2& a, const Pose2& b, const std::vector<std::vector<Motion>>& steps,
-                                const Eigen::Vector3d& correction, const Eigen::Matrix3d& whitening, bool jacobians) {
+OdometryFactor OdometryResidual(const Pose2& a, const Pose2& b, const OdometryIncrementJacobians& increment,
+                                const Eigen::Matrix3d& whitening, bool jacobians) {
   const BetweenJacobians between = BetweenWithJacobians(a, b);
   OdometryFactor out;
-  Eigen::Vector3d e;
+  Eigen::Vector3d e = between.value - increment.delta.Vector();
   if (jacobians) {
-    const OdometryIncrementJacobians increment = OdometryIncrementWithJacobian(steps, correction);
-    e = between.value - increment.delta.Vector();
     out.d_a = whitening * between.ja;
     out.d_b = whitening * between.jb;
     out.d_correction = -whitening * increment.d_correction;
-  } else {
-    e = between.value - OdometryIncrement(steps, correction).Vector();
   }
   e(2) = WrapAngle(e(2));
   out.residual = whitening * e;

@@ -32,16 +32,17 @@ struct OdometryIncrementJacobians {
 };
 OdometryIncrementJacobians OdometryIncrementWithJacobian(const std::vector<std::vector<Motion>>& steps,
                                                          const Eigen::Vector3d& correction);
-// The odometry factor between consecutive keyframes a and b: r = W (Between(x_a, x_b) -
-// OdometryIncrement(steps, c)), heading wrapped, and (with jacobians) its Jacobians with respect
-// to x_a, x_b and c.
+// The odometry factor between consecutive keyframes a and b: r = W (Between(x_a, x_b) - Delta(c)),
+// heading wrapped, Delta(c) the increment between them under the correction c (`increment`:
+// OdometryIncrementWithJacobian's, or OdometryPreintegration's), and (with jacobians) its
+// Jacobians with respect to x_a, x_b and c.
 struct OdometryFactor {
   Eigen::Vector3d residual;
   Eigen::Matrix3d d_a, d_b, d_correction;
 };
 OdometryFactor OdometryResidual(const common::Pose2& a, const common::Pose2& b,
-                                const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& correction,
-                                const Eigen::Matrix3d& whitening, bool jacobians);
+                                const OdometryIncrementJacobians& increment, const Eigen::Matrix3d& whitening,
+                                bool jacobians);
 
 // The covariance of a composition of per-step increments, each with additive noise of
 // variances var in the frame it starts from: Sigma_i = J Sigma_{i-1} J^T + diag(var).

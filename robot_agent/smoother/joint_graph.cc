@@ -253,8 +253,9 @@ void JointGraph::AddOdometryRows(int r, NormalEquations* rows) const {
   const Robot& robot = robots_[r];
   for (int k = 1; k < robot.active; ++k) {
     const Keyframe& kf = robot.keyframes[k];
-    const OdometryFactor f = OdometryResidual(robot.keyframes[k - 1].pose, kf.pose, kf.steps, robot.correction,
-                                              kf.whitening, rows->jacobians);
+    const OdometryFactor f =
+        OdometryResidual(robot.keyframes[k - 1].pose, kf.pose, kf.odometry.At(kf.steps, robot.correction), kf.whitening,
+                         rows->jacobians);
     rows->cost += f.residual.squaredNorm();
     if (rows->jacobians) {
       rows->Add(f.residual,

@@ -14,6 +14,7 @@
 #include "robot_agent/smoother/graph_factors.h"
 #include "robot_agent/smoother/levenberg_marquardt.h"
 #include "robot_agent/smoother/normal_equations.h"
+#include "robot_agent/smoother/odometry_preintegration.h"
 
 namespace mrslam::robot_agent::smoother {
 
@@ -36,8 +37,8 @@ namespace mrslam::robot_agent::smoother {
 // filter.smoother.max_keyframe_gap_steps steps and its last step held. Factors, each a whitened
 // residual as KeyframeGraph's:
 // * odometry between consecutive keyframes of a robot under its correction c_r = (s_v, s_w,
-//   b_w) (OdometryIncrement; covariance accumulated per step from noise.robot_process_var,
-//   fixed at the configured calibration), and the correction's prior N((1, 1, 0),
+//   b_w) (OdometryIncrement, preintegrated: OdometryPreintegration; covariance accumulated per step from
+//   noise.robot_process_var, fixed at the configured calibration), and the correction's prior N((1, 1, 0),
 //   diag(filter.smoother.*_sd^2)) per robot;
 // * a landmark reading (range, bearing) of landmark j from keyframe x: r = W (z - h(x, p_j)),
 //   Huber loss of width huber_k, left out while its whitened squared norm exceeds the chi-square
@@ -98,6 +99,7 @@ class JointGraph {
     std::vector<std::vector<Motion>> steps;  // the odometry since the previous keyframe
     Eigen::Matrix3d whitening = Eigen::Matrix3d::Identity();
     std::vector<Observation> observations;
+    mutable OdometryPreintegration odometry;  // the odometry factor's increment (a cache)
   };
   struct Robot {
     std::string id;

@@ -281,8 +281,8 @@ void KeyframeGraph::StartLandmarks() {
 
 void KeyframeGraph::AddOdometryRows(const Layout& layout, const Keyframe& previous, const Keyframe& kf,
                                     Rows* rows) const {
-  const OdometryFactor f =
-      OdometryResidual(previous.pose, kf.pose, kf.steps, correction_, kf.odometry_whitening, rows->jacobians);
+  const OdometryFactor f = OdometryResidual(previous.pose, kf.pose, kf.odometry.At(kf.steps, correction_),
+                                            kf.odometry_whitening, rows->jacobians);
   rows->cost += f.residual.squaredNorm();
   if (!rows->jacobians) return;
   const int c_col = layout.Col({Var::kCorrection, 0});

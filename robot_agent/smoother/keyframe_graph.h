@@ -17,6 +17,7 @@
 #include "robot_agent/options/agent_options.h"
 #include "robot_agent/smoother/levenberg_marquardt.h"
 #include "robot_agent/smoother/normal_equations.h"
+#include "robot_agent/smoother/odometry_preintegration.h"
 
 namespace mrslam::robot_agent::smoother {
 
@@ -178,6 +179,8 @@ class KeyframeGraph {
     std::vector<std::vector<Motion>> steps;  // the odometry since the previous keyframe, per step
     Eigen::Matrix3d odometry_whitening = Eigen::Matrix3d::Identity();  // L^-1
     std::vector<StoredReading> readings;
+    // The odometry factor's increment, evaluated at every solve (a cache: not written).
+    mutable OdometryPreintegration odometry;
 
     void Io(common::Archive& ar) {
       ar(step, pose, fixed, has_odometry, odometry_cut, steps, odometry_whitening, readings);

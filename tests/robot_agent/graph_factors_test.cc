@@ -44,14 +44,15 @@ TEST(GraphFactors, TheOdometryFactorsJacobiansMatchNumericDifferences) {
   const Eigen::Vector3d c(0.97, 1.02, -0.01);
   const auto steps = Steps();
   const Eigen::Matrix3d w = Eigen::Vector3d(10.0, 20.0, 30.0).asDiagonal();
-  const OdometryFactor f = OdometryResidual(a, b, steps, c, w, true);
-  EXPECT_LT((f.residual - OdometryResidual(a, b, steps, c, w, false).residual).norm(), 1e-12);
+  const OdometryFactor f = OdometryResidual(a, b, OdometryIncrementWithJacobian(steps, c), w, true);
+  EXPECT_LT((f.residual - OdometryResidual(a, b, OdometryIncrementWithJacobian(steps, c), w, false).residual).norm(),
+            1e-12);
   constexpr double kH = 1e-6;
   for (int i = 0; i < 3; ++i) {
     Eigen::Vector3d d = Eigen::Vector3d::Zero();
     d(i) = kH;
     const auto at = [&](const Pose2& pa, const Pose2& pb, const Eigen::Vector3d& pc) {
-      return OdometryResidual(pa, pb, steps, pc, w, false).residual;
+      return OdometryResidual(pa, pb, OdometryIncrementWithJacobian(steps, pc), w, false).residual;
     };
     const Eigen::Vector3d da =
         (at(Pose2::FromVector(a.Vector() + d), b, c) - at(Pose2::FromVector(a.Vector() - d), b, c)) / (2 * kH);
