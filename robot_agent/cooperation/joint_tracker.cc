@@ -43,10 +43,12 @@ JointEstimate JointTracker::Solve(const std::map<std::string, FactorLog>& logs, 
 void JointTracker::AfterStep(std::uint32_t k, const filters::FilterEstimate& estimate,
                              const std::map<std::string, FactorLog>& logs, std::uint64_t steps_received) {
   if (every_steps_ == 0 || k < next_due_) return;
+  // Due at the multiples of every_steps_ only, the same steps for every agent: in lockstep the
+  // agents' solves then run side by side, not one after the other while the rest wait.
+  next_due_ = (k / every_steps_ + 1) * every_steps_;
   if (logs.size() < 2 || steps_received == received_at_solve_) return;
   const auto own = logs.find(options_.robot_id);
   if (own == logs.end() || own->second.Held() != k) return;  // the own log stopped growing
-  next_due_ = k + every_steps_;
   received_at_solve_ = steps_received;
   const JointEstimate joint = Solve(logs, false);
   if (joint.path.empty() || joint.path.back().first != static_cast<int>(k)) return;

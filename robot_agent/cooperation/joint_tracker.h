@@ -17,8 +17,9 @@
 namespace mrslam::robot_agent::cooperation {
 
 // With raw measurements shared among landmarks taken as static (JointTracker::Enabled):
-// every cooperation.joint_every_s of run time (0: never), once steps of other robots are held
-// and new ones arrived since the last solve, the joint graph over everything held is solved
+// every cooperation.joint_every_s of run time (0: never; at the steps that are multiples of it,
+// the same for every agent), if steps of other robots are held and new ones arrived since the
+// last solve, the joint graph over everything held is solved
 // again, warm-started from the last one (JointGraph::WarmStart; a few iterations, not to
 // convergence). The own estimate is then the
 // filter's moved by the rigid motion C = J_s * F_s^-1 that takes the filter's pose F_s of that
