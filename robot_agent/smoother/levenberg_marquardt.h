@@ -33,9 +33,10 @@ struct LmResult {
 // Levenberg-Marquardt on the sparse normal equations H = J^T J (+ priors), g = J^T r: at most
 // max_iterations times, solve (H + lambda diag(H) + ridge I) delta = -g (diag floored at 1e-9),
 // keep the step if the cost falls (lambda / 10, at least 1e-9), else put it back (lambda x 10;
-// give up beyond 1e6); stop once the step's largest entry is below min_step or the cost falls by
-// less than min_relative_decrease (1 + cost). Lambda starts at 1e-6. The ridge keeps a variable nothing informs
-// from making H singular. `solver` keeps the last factorization (for covariances).
+// give up beyond 1e6) and damp the same normal equations again, not rebuilt at the same point; stop once the step's
+// largest entry is below min_step or the cost falls by less than min_relative_decrease (1 + cost). Lambda starts at
+// 1e-6. The ridge keeps a variable nothing informs from making H singular. `solver` keeps the last factorization (for
+// covariances).
 LmResult LevenbergMarquardt(const LeastSquares& problem, int max_iterations, double ridge, Factorization* solver);
 
 }  // namespace mrslam::robot_agent::smoother
