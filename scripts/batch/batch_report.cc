@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 
 #include "common/parallel_for.h"
@@ -10,24 +11,13 @@
 namespace mrslam::batch {
 
 double Metric(const RobotRun& r, int i) {
-  switch (i) {
-    case 0:
-      return r.position_rmse_m;
-    case 1:
-      return r.heading_rmse_deg;
-    case 2:
-      return r.landmark_rmse_m;
-    case 3:
-      return r.dead_reckoning_rmse_m;
-    case 4:
-      return r.static_landmark_rmse_m;
-    case 5:
-      return r.moving_landmark_rmse_m;
-    case 6:
-      return r.moving_completeness;
-    default:
-      return r.mean_nees;
-  }
+  // In the order of kMetricNames.
+  static constexpr double RobotRun::*kMembers[] = {&RobotRun::position_rmse_m,        &RobotRun::heading_rmse_deg,
+                                                   &RobotRun::landmark_rmse_m,        &RobotRun::dead_reckoning_rmse_m,
+                                                   &RobotRun::static_landmark_rmse_m, &RobotRun::moving_landmark_rmse_m,
+                                                   &RobotRun::moving_completeness,    &RobotRun::mean_nees};
+  static_assert(std::size(kMembers) == std::size(kMetricNames));
+  return r.*kMembers[i];
 }
 
 void ForEachSeed(int num_tasks, int threads, const std::function<void(int)>& fn) {
