@@ -15,7 +15,8 @@ double Metric(const RobotRun& r, int i) {
   static constexpr double RobotRun::*kMembers[] = {&RobotRun::position_rmse_m,        &RobotRun::heading_rmse_deg,
                                                    &RobotRun::landmark_rmse_m,        &RobotRun::dead_reckoning_rmse_m,
                                                    &RobotRun::static_landmark_rmse_m, &RobotRun::moving_landmark_rmse_m,
-                                                   &RobotRun::moving_completeness,    &RobotRun::mean_nees};
+                                                   &RobotRun::moving_completeness,    &RobotRun::mean_nees,
+                                                   &RobotRun::own_landmark_rmse_m};
   static_assert(std::size(kMembers) == std::size(kMetricNames));
   return r.*kMembers[i];
 }

@@ -23,12 +23,14 @@ struct RobotRun {
   double moving_landmark_rmse_m = 0.0;
   double moving_completeness = 0.0;
   double mean_nees = 0.0;
+  double own_landmark_rmse_m = 0.0;
 };
 
 // The names of summary.json (docs/metrics.md).
 inline constexpr const char* kMetricNames[] = {
     "position_rmse_m",        "heading_rmse_deg",       "landmark_rmse_m",     "dead_reckoning_rmse_m",
-    "static_landmark_rmse_m", "moving_landmark_rmse_m", "moving_completeness", "mean_nees"};
+    "static_landmark_rmse_m", "moving_landmark_rmse_m", "moving_completeness", "mean_nees",
+    "own_landmark_rmse_m"};
 inline constexpr int kNumMetrics = static_cast<int>(std::size(kMetricNames));
 // The figure kMetricNames[i] of r.
 double Metric(const RobotRun& r, int i);

@@ -116,7 +116,8 @@ std::vector<RobotRun> RunSeed(const common::ScenarioOptions& options, std::uint6
   std::vector<RobotRun> out;
   for (const evaluator::RobotSummary& s : ScoreSeed(options, seed, estimators, progress ? observer : StepObserver{})) {
     out.push_back({s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m,
-                   s.static_landmark_rmse_m, s.moving_landmark_rmse_m, s.moving_completeness, s.mean_nees});
+                   s.static_landmark_rmse_m, s.moving_landmark_rmse_m, s.moving_completeness, s.mean_nees,
+                   s.own_landmark_rmse_m});
   }
   return out;
 }

@@ -119,6 +119,20 @@ TEST(RobotScorerTest, LandmarkErrorsSplitByWhatTheMapLandmarkStandsFor) {
   EXPECT_NEAR(s.moving_landmark_rmse_m, 0.4, 1e-9);
 }
 
+// Landmark 1 (far away) stands in the map as a peer handed it over, never within the robot's
+// reach: the own figure leaves it out, the landmark RMSE counts it.
+TEST(RobotScorerTest, TheOwnLandmarkFigureCountsOnlyWhatTheRobotCouldHaveObserved) {
+  RobotScorer scorer(kFrame, Pose2{}, Lidar(5.0));
+  MapPoint own = InOwnFrame(Truth().landmarks[0].pose);
+  own.position_m.x() += 0.2;
+  MapPoint handed = InOwnFrame(Truth().landmarks[1].pose);
+  handed.position_m.y() += 1.0;
+  scorer.Add(Truth(), kFrame, Pose2{}, std::nullopt, {own, handed}, nullptr);
+  const RobotSummary s = scorer.Summary();
+  EXPECT_NEAR(s.own_landmark_rmse_m, 0.2, kTol);
+  EXPECT_NEAR(s.landmark_rmse_m, std::sqrt((0.04 + 1.0) / 2.0), kTol);
+}
+
 TEST(RobotScorerTest, WithoutMoversMovingFiguresAreNeutral) {
   RobotScorer scorer(kFrame, Pose2{}, Lidar(5.0));
   scorer.Add(Truth(), kFrame, Pose2{}, std::nullopt, {InOwnFrame(Truth().landmarks[0].pose)}, nullptr);

@@ -51,7 +51,10 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
     s.landmark_errors_m.push_back(match.error_m);
     const bool mover = match.truth_index >= 0 && moving[static_cast<std::size_t>(match.truth_index)];
     (mover ? moving_landmark_err_ : static_landmark_err_).Add(match.error_m);
-    if (match.truth_index >= 0) in_map_.insert(true_points[static_cast<std::size_t>(match.truth_index)].landmark_id);
+    if (match.truth_index < 0) continue;
+    const int id = true_points[static_cast<std::size_t>(match.truth_index)].landmark_id;
+    in_map_.insert(id);
+    if (seen_.count(id) > 0) own_landmark_err_.Add(match.error_m);
   }
   for (const double e : s.landmark_errors_m) landmark_err_.Add(e);
   completeness_ = Completeness(seen_, in_map_);
@@ -75,6 +78,7 @@ RobotSummary RobotScorer::Summary() const {
   r.landmark_rmse_m = landmark_err_.Value();
   r.static_landmark_rmse_m = static_landmark_err_.Value();
   r.moving_landmark_rmse_m = moving_landmark_err_.Value();
+  r.own_landmark_rmse_m = own_landmark_err_.Value();
   r.dead_reckoning_rmse_m = dead_reckoning_err_.Value();
   r.mean_nees = nees_count_ == 0 ? 0.0 : nees_sum_ / static_cast<double>(nees_count_);
   r.landmarks_mapped = mapped_;

@@ -33,6 +33,10 @@ struct RobotSummary {
   // map landmark with no true partner counts as static: it corrupts the static map).
   double static_landmark_rmse_m = 0.0;
   double moving_landmark_rmse_m = 0.0;
+  // Over the map landmarks whose true partner the robot itself has had within its lidar's reach
+  // by then (what it could have observed, not what peers handed it; one matched to a landmark
+  // never in reach, or to none, is left out; 0 when none is left).
+  double own_landmark_rmse_m = 0.0;
   double dead_reckoning_rmse_m = 0.0;  // over the steps with odometry
   double mean_nees = 0.0;              // over the steps with a finite NEES; 0 for none
   std::size_t landmarks_mapped = 0;    // at the last step
@@ -74,7 +78,7 @@ class RobotScorer {
 
   // Running figures only: the scorer's memory does not grow with the run.
   RunningRmse position_err_, heading_err_deg_, landmark_err_, dead_reckoning_err_;
-  RunningRmse static_landmark_err_, moving_landmark_err_;
+  RunningRmse static_landmark_err_, moving_landmark_err_, own_landmark_err_;
   double nees_sum_ = 0.0;
   std::size_t nees_count_ = 0;
   std::set<int> seen_;         // true landmark ids ever within the robot's reach

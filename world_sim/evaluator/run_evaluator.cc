@@ -315,6 +315,7 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["landmark_rmse_m"] = s.landmark_rmse_m;
   r["static_landmark_rmse_m"] = s.static_landmark_rmse_m;
   r["moving_landmark_rmse_m"] = s.moving_landmark_rmse_m;
+  r["own_landmark_rmse_m"] = s.own_landmark_rmse_m;
   r["dead_reckoning_rmse_m"] = s.dead_reckoning_rmse_m;
   r["mean_nees"] = s.mean_nees;
   r["landmarks_mapped"] = s.landmarks_mapped;
