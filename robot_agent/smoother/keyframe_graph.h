@@ -160,9 +160,10 @@ class KeyframeGraph {
   // keyframe's bytes per marginalized keyframe; the rest follows the window, the map and the
   // movers, bounded while they are.
   std::size_t EstimatorBytes() const;
-  // What one keyframe holds, its pose, odometry (per step a vector of segments) and readings:
-  // sizeof(Keyframe) + steps sizeof(std::vector<Motion>) + segments sizeof(Motion) + readings
-  // sizeof(StoredReading), `segments` counted over all its steps (x86-64: 160 + 24 + 24 + 32).
+  // What one keyframe holds, its pose, odometry (per step a vector of segments), readings and
+  // preintegrated odometry: sizeof(Keyframe) + steps sizeof(std::vector<Motion>) + segments
+  // sizeof(Motion) + readings sizeof(StoredReading), `segments` counted over all its steps
+  // (x86-64: 384 + 24 + 24 + 32).
   static std::size_t KeyframeBytes(int steps, int segments, int readings);
 
  private:
