@@ -49,6 +49,9 @@ std::vector<std::string> RobotIds(const common::ScenarioOptions& scenario) {
   return ids;
 }
 
+// Of `expected` samples, how many did not come.
+std::size_t Lost(std::size_t received, std::size_t expected) { return expected - std::min(received, expected); }
+
 }  // namespace
 
 RunEvaluator::RunEvaluator(const common::ScenarioOptions& scenario, const std::string& out_dir)
@@ -155,8 +158,7 @@ std::string RunEvaluator::Missing() const {
 }
 
 std::size_t RunEvaluator::TruthStepsLost() const {
-  const auto all = static_cast<std::size_t>(scenario_.run.steps) + 1;
-  return all - std::min(truth_steps_, all);
+  return Lost(truth_steps_, static_cast<std::size_t>(scenario_.run.steps) + 1);  // steps 0..N
 }
 
 std::size_t RunEvaluator::Pending() const {
@@ -335,8 +337,7 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["union_completeness"] =
       union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
   r["steps_scored"] = s.steps_scored;
-  const auto odometry_steps = static_cast<std::size_t>(scenario_.run.steps);  // steps 1..N
-  r["odometry_steps_lost"] = odometry_steps - std::min(robot.odometry_steps, odometry_steps);
+  r["odometry_steps_lost"] = Lost(robot.odometry_steps, static_cast<std::size_t>(scenario_.run.steps));  // 1..N
   r["step_cpu_ms_median"] = robot.step_cpu_ms.empty() ? 0.0 : Median(robot.step_cpu_ms);
   r["step_cpu_ms_p99"] = robot.step_cpu_ms.empty() ? 0.0 : Percentile(robot.step_cpu_ms, 99.0);
   // Per simulated second of the steps the agent went through.
