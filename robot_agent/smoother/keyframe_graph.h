@@ -163,7 +163,7 @@ class KeyframeGraph {
   // What one keyframe holds, its pose, odometry (per step a vector of segments), readings and
   // preintegrated odometry: sizeof(Keyframe) + steps sizeof(std::vector<Motion>) + segments
   // sizeof(Motion) + readings sizeof(StoredReading), `segments` counted over all its steps
-  // (x86-64: 384 + 24 + 24 + 32).
+  // (x86-64: 520 + 24 + 24 + 32).
   static std::size_t KeyframeBytes(int steps, int segments, int readings);
 
  private:

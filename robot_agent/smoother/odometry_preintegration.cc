@@ -18,12 +18,12 @@ void OdometryPreintegration::Measure(const std::vector<std::vector<Motion>>& ste
   // Half a cell from its centre: |d_w| max|W_j| + |d_b| T_n <= kReach.
   cell_w_ = kReach / std::max(w_reach_, 1e-9);
   cell_b_ = kReach / std::max(t_total_, 1e-9);
+  measured_ = true;
 }
 
-void OdometryPreintegration::Expand(const std::vector<std::vector<Motion>>& steps, double i, double j) {
-  cell_i_ = i;
-  cell_j_ = j;
-  const double s_w0 = i * cell_w_, b_w0 = j * cell_b_;
+void OdometryPreintegration::Expand(const std::vector<std::vector<Motion>>& steps, double s_w0, double b_w0) {
+  s_w0_ = s_w0;
+  b_w0_ = b_w0;
   for (auto& m : m_) m = 0.0;
   double heading = 0.0, w_sum = 0.0, t_sum = 0.0;
   for (const auto& step : steps) {
@@ -36,18 +36,23 @@ void OdometryPreintegration::Expand(const std::vector<std::vector<Motion>>& step
       const std::complex<double> terms[10] = {
           az,         az * w,         az * t,         az * w * w,     az * w * t,
           az * t * t, az * w * w * w, az * w * w * t, az * w * t * t, az * t * t * t};
-      for (int k = 0; k < 10; ++k) m_[k] += terms[k];
+      for (int i = 0; i < 10; ++i) m_[i] += terms[i];
     }
   }
   ++expansions_;
 }
 
-OdometryIncrementJacobians OdometryPreintegration::At(const std::vector<std::vector<Motion>>& steps,
-                                                      const Eigen::Vector3d& c) {
-  if (cell_w_ == 0.0) Measure(steps);
+const OdometryIncrementJacobians& OdometryPreintegration::At(const std::vector<std::vector<Motion>>& steps,
+                                                             const Eigen::Vector3d& c) {
+  if (expansions_ > 0 && c == at_) return value_;
+  if (!measured_) Measure(steps);
   const double i = std::round(c(1) / cell_w_), j = std::round(c(2) / cell_b_);
-  if (expansions_ == 0 || i != cell_i_ || j != cell_j_) Expand(steps, i, j);
-  const double dw = c(1) - i * cell_w_, db = c(2) - j * cell_b_;
+  if (expansions_ == 0 || i != cell_i_ || j != cell_j_) {
+    cell_i_ = i;
+    cell_j_ = j;
+    Expand(steps, i * cell_w_, j * cell_b_);
+  }
+  const double dw = c(1) - s_w0_, db = c(2) - b_w0_;
   constexpr std::complex<double> kI(0.0, 1.0);
   const auto& m = m_;
   const std::complex<double> p =
@@ -58,12 +63,12 @@ OdometryIncrementJacobians OdometryPreintegration::At(const std::vector<std::vec
   const std::complex<double> p_b =
       kI * m[2] - (dw * m[4] + db * m[5]) - kI / 2.0 * (dw * dw * m[7] + 2.0 * dw * db * m[8] + db * db * m[9]);
   const double s_v = c(0);
-  OdometryIncrementJacobians out;
-  out.delta = {s_v * p.real(), s_v * p.imag(), common::WrapAngle(c(1) * w_total_ + c(2) * t_total_)};
-  out.d_correction << p.real(), s_v * p_w.real(), s_v * p_b.real(),  //
-      p.imag(), s_v * p_w.imag(), s_v * p_b.imag(),                  //
+  value_.delta = {s_v * p.real(), s_v * p.imag(), common::WrapAngle(c(1) * w_total_ + c(2) * t_total_)};
+  value_.d_correction << p.real(), s_v * p_w.real(), s_v * p_b.real(),  //
+      p.imag(), s_v * p_w.imag(), s_v * p_b.imag(),                     //
       0.0, w_total_, t_total_;
-  return out;
+  at_ = c;
+  return value_;
 }
 
 }  // namespace mrslam::robot_agent::smoother

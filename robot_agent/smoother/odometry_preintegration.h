@@ -1,6 +1,7 @@
 #pragma once
 
 #include <complex>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -33,22 +34,26 @@ class OdometryPreintegration {
 
   // The increment and its Jacobian in the correction over `steps` at c. `steps` must be those of
   // every earlier call.
-  OdometryIncrementJacobians At(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& c);
+  const OdometryIncrementJacobians& At(const std::vector<std::vector<Motion>>& steps, const Eigen::Vector3d& c);
   // How many times the segments were gone over for the moments (the cells entered so far).
   int Expansions() const { return expansions_; }
 
  private:
-  // W_n, T_n, max_j |W_j| and the grid's spacing (cell_w_ 0: not measured yet).
   void Measure(const std::vector<std::vector<Motion>>& steps);
-  // The moments at the centre of cell (i, j).
-  void Expand(const std::vector<std::vector<Motion>>& steps, double i, double j);
+  void Expand(const std::vector<std::vector<Motion>>& steps, double s_w0, double b_w0);
 
+  bool measured_ = false;
   int expansions_ = 0;
-  double w_total_ = 0.0, t_total_ = 0.0, w_reach_ = 0.0;
-  double cell_w_ = 0.0, cell_b_ = 0.0;  // the grid's spacing in s_w and b_w
-  double cell_i_ = 0.0, cell_j_ = 0.0;  // the cell of the moments (indices; its centre i cell_w_, j cell_b_)
+  double w_total_ = 0.0, t_total_ = 0.0, w_reach_ = 0.0;  // W_n, T_n, max_j |W_j|
+  double cell_w_ = 0.0, cell_b_ = 0.0;                    // the grid's spacing in s_w and b_w
+  double cell_i_ = 0.0, cell_j_ = 0.0;                    // the cell of the moments (indices)
+  double s_w0_ = 0.0, b_w0_ = 0.0;                        // its centre
   // M_pq in the order 00, 10, 01, 20, 11, 02, 30, 21, 12, 03.
   std::complex<double> m_[10];
+  // The last value and where: a solve evaluates each factor twice at one correction (a step's
+  // cost, then its linearization), and std::complex arithmetic is not free.
+  Eigen::Vector3d at_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  OdometryIncrementJacobians value_;
 };
 
 }  // namespace mrslam::robot_agent::smoother
