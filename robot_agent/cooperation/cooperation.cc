@@ -168,6 +168,17 @@ std::vector<std::string> Cooperation::frames_known() const {
   return out;
 }
 
+std::map<std::string, std::uint32_t> Cooperation::data_held() const {
+  std::map<std::string, std::uint32_t> out;
+  for (const auto& [peer, state] : peers_) {
+    if (state.last_snapshot_step) out[peer] = *state.last_snapshot_step;
+  }
+  for (const auto& [origin, log] : exchange_.logs()) {
+    if (origin != robot_id_ && log.Held() > 0) out[origin] = std::max(out[origin], log.Held());
+  }
+  return out;
+}
+
 int Cooperation::rejected_messages() const { return rejected_; }
 
 bool Cooperation::HeaderValid(const PeerHeader& h) const {

@@ -53,6 +53,9 @@ class Cooperation {
   const std::vector<RendezvousEvent>& rendezvous() const;
   std::vector<FrameTransform> known_transforms() const;
   std::vector<std::string> frames_known() const;
+  // Per other robot whose data reached this agent: the steps 1..n of its run taken in (raw steps
+  // held, or the step of the last map snapshot merged, whichever is later).
+  std::map<std::string, std::uint32_t> data_held() const;
   // Peer messages rejected so far: malformed ones and, among them counted apart, those only out of
   // order (stale_messages: older than one already applied from the sender, or a snapshot or
   // notice from a peer whose frame is not known yet, as happens in realtime when a message

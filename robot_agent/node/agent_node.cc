@@ -563,6 +563,7 @@ struct AgentNode::Impl {
     msg::Estimate m = ToMsg(joint_tracker.Corrected(estimate), agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
     m.frames_known(cooperation.frames_known());
+    m.data_held(DataHeldMsg(cooperation.data_held()));
     m.rejected_samples(counters.rejected.Total());
     m.step_cpu_ms(step_cpu_ms);
     m.peer_bytes_sent(Total(bytes_sent_to));

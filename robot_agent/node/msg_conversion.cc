@@ -187,6 +187,17 @@ cooperation::RelativeMeasurement FromMsg(const msg::RelativeMeasurement& m) {
   return r;
 }
 
+std::vector<msg::DataHeld> DataHeldMsg(const std::map<std::string, std::uint32_t>& held) {
+  std::vector<msg::DataHeld> out;
+  for (const auto& [robot, steps] : held) {
+    msg::DataHeld m;
+    m.robot_id(robot);
+    m.steps(steps);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
 msg::FactorBatch ToMsg(const cooperation::FactorBatch& b) {
   msg::FactorBatch m;
   PutHeader(b.header, &m);

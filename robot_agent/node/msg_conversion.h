@@ -19,6 +19,8 @@ filters::FilterEstimate FromMsg(const msg::Estimate& estimate);
 msg::LandmarkEstimate ToMsg(const filters::MapLandmark& landmark);
 filters::MapLandmark FromMsg(const msg::LandmarkEstimate& landmark);
 msg::RendezvousEvent ToMsg(const cooperation::RendezvousEvent& event);
+// Cooperation::data_held, per robot in id order.
+std::vector<msg::DataHeld> DataHeldMsg(const std::map<std::string, std::uint32_t>& held);
 cooperation::RendezvousEvent FromMsg(const msg::RendezvousEvent& event);
 msg::RendezvousEvent ToMsg(const cooperation::FrameTransform& transform);
 cooperation::FrameTransform TransformFromMsg(const msg::RendezvousEvent& event);

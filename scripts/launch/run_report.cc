@@ -86,6 +86,7 @@ const std::vector<std::string>& AggregatedMetrics() {
                                                    "map_completeness",
                                                    "moving_completeness",
                                                    "union_completeness",
+                                                   "reachable_union_completeness",
                                                    "mean_nees",
                                                    "final_trajectory_rmse_m",
                                                    "step_cpu_ms_median"};

@@ -97,6 +97,8 @@ TEST(FactorRelayTest, ARobotsStepsReachOneItNeverMetThroughAThird) {
     EXPECT_GT(r["peer_bytes_received_per_s"].get<double>(), 0.0) << id;
     EXPECT_EQ(r["rejected_samples"].get<int>(), 0) << id;
   }
+  // The estimates tell which of r3's steps reached r1: all it holds at the end.
+  EXPECT_EQ(summary["robots"]["r1"]["data_held"]["r3"].get<std::size_t>(), relayed.size());
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -35,8 +36,9 @@ class RunEvaluatorTest : public ::testing::Test {
   }
   void TearDown() override { std::filesystem::remove_all(out_dir_); }
 
-  // Scores the run in which r1 knows the frames in r1_frames_known.
-  nlohmann::json Score(const std::vector<std::string>& r1_frames_known) const {
+  // Scores the run in which r1 knows the frames in r1_frames_known and holds r1_data_held.
+  nlohmann::json Score(const std::vector<std::string>& r1_frames_known,
+                       const std::map<std::string, std::uint32_t>& r1_data_held = {}) const {
     RunEvaluator evaluator(scenario_, out_dir_);
     for (std::uint32_t step = 0; step <= 1; ++step) {
       common::GroundTruth truth;
@@ -50,6 +52,7 @@ class RunEvaluatorTest : public ::testing::Test {
       r1.landmarks = {{Eigen::Vector2d(1.0, 0.0), 1}};
       r2.landmarks = {{Eigen::Vector2d(1.0, 0.0), 2}};  // in r2's own frame
       r1.frames_known = r1_frames_known;
+      r1.data_held = r1_data_held;
       r1.rejected_samples = 2 * step;                  // the agent's running count
       r1.step_cpu_ms = 1.0 + 2.0 * step;               // 1 and 3 ms
       r1.peer_bytes_sent = std::uint64_t{300} * step;  // the agent's running counts
@@ -82,6 +85,19 @@ TEST_F(RunEvaluatorTest, UnionCompletenessCountsTheLandmarksOfTheFramesKnown) {
   EXPECT_DOUBLE_EQ(knowing["robots"]["r1"]["map_completeness"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(knowing["robots"]["r1"]["union_completeness"].get<double>(), 0.5);
   EXPECT_DOUBLE_EQ(knowing["robots"]["r2"]["union_completeness"].get<double>(), 1.0);
+}
+
+TEST_F(RunEvaluatorTest, ReachableUnionCompletenessCountsOnlyWhatReachedTheAgent) {
+  // r1 knows r2's frame but none of r2's data reached it: landmark 2 could not be in its map.
+  const nlohmann::json frame_only = Score({"r2"});
+  EXPECT_DOUBLE_EQ(frame_only["robots"]["r1"]["union_completeness"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(frame_only["robots"]["r1"]["reachable_union_completeness"].get<double>(), 1.0);
+  // r2's step 1, in which landmark 2 was within its reach, reached r1.
+  const nlohmann::json with_data = Score({"r2"}, {{"r2", 1U}});
+  EXPECT_DOUBLE_EQ(with_data["robots"]["r1"]["reachable_union_completeness"].get<double>(), 0.5);
+  // Data of a robot whose frame it does not know adds nothing.
+  const nlohmann::json data_only = Score({}, {{"r2", 1U}});
+  EXPECT_DOUBLE_EQ(data_only["robots"]["r1"]["reachable_union_completeness"].get<double>(), 1.0);
 }
 
 TEST_F(RunEvaluatorTest, RejectedSamplesAreTheAgentsCountAtTheEnd) {

@@ -33,6 +33,7 @@ RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
     e.shown_landmarks.push_back(ToMapLandmark(l));
   }
   e.frames_known = m.frames_known();
+  for (const auto& h : m.data_held()) e.data_held[h.robot_id()] = h.steps();
   e.rejected_samples = m.rejected_samples();
   e.step_cpu_ms = m.step_cpu_ms();
   e.peer_bytes_sent = m.peer_bytes_sent();

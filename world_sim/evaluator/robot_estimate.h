@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,8 @@ struct RobotEstimate {
   std::vector<MapPoint> landmarks;           // in the robot's own frame (scored)
   std::vector<MapLandmark> shown_landmarks;  // the same landmarks with covariance and motion
   std::vector<std::string> frames_known;
+  // Per other robot whose data reached the agent: the steps 1..n of its run taken in.
+  std::map<std::string, std::uint32_t> data_held;
   std::vector<RendezvousRecord> rendezvous;
   // Samples and peer messages the agent has rejected so far (malformed, stale, not for it).
   std::uint32_t rejected_samples = 0;

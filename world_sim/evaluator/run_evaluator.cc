@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <stdexcept>
 
@@ -101,7 +102,7 @@ void RunEvaluator::AddTruth(const common::GroundTruth& truth, std::int64_t writt
     robot->second.truth_own.Set(step, TruthInOwnFrame(rt.pose, robot->second.frame));
     for (const auto& l : truth.landmarks) {
       if (InLidarReach(scenario_.sensors.lidar, rt.pose, l.pose.Translation()))
-        robot->second.reached.insert(std::stoi(l.id));
+        robot->second.reached.emplace(std::stoi(l.id), step);  // kept when already in
     }
   }
   Advance(false);
@@ -323,19 +324,15 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["landmarks_mapped"] = s.landmarks_mapped;
   r["map_completeness"] = s.map_completeness;
   r["moving_completeness"] = s.moving_completeness;
-  // Of the landmarks within the reach of this robot or of any robot whose frame it knows (over
-  // the whole run), the share in its map at the end.
-  std::set<int> union_reach = robot.reached;
-  if (robot.last) {
-    for (const auto& peer : robot.last->frames_known) {
-      if (const auto it = robots_.find(peer); it != robots_.end())
-        union_reach.insert(it->second.reached.begin(), it->second.reached.end());
-    }
-  }
-  std::size_t union_mapped = 0;
-  for (const int l : union_reach) union_mapped += robot.scorer->InMap().count(l);
-  r["union_completeness"] =
-      union_reach.empty() ? 1.0 : static_cast<double>(union_mapped) / static_cast<double>(union_reach.size());
+  // Of the landmarks within the reach of this robot or of the robots whose frames it knows, the
+  // share in its map at the end.
+  const auto share_mapped = [&](const std::set<int>& reach) {
+    std::size_t mapped = 0;
+    for (const int l : reach) mapped += robot.scorer->InMap().count(l);
+    return reach.empty() ? 1.0 : static_cast<double>(mapped) / static_cast<double>(reach.size());
+  };
+  r["union_completeness"] = share_mapped(UnionReach(robot, false));
+  r["reachable_union_completeness"] = share_mapped(UnionReach(robot, true));
   r["steps_scored"] = s.steps_scored;
   r["odometry_steps_lost"] = Lost(robot.odometry_steps, static_cast<std::size_t>(scenario_.run.steps));  // 1..N
   r["step_cpu_ms_median"] = robot.step_cpu_ms.empty() ? 0.0 : Median(robot.step_cpu_ms);
@@ -352,9 +349,30 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["latency_us_p99"] = delivery.latency_us_p99;
   r["late_estimates"] = delivery.late_estimates;
   r["frames_known"] = robot.last ? robot.last->frames_known : std::vector<std::string>{};
+  r["data_held"] = robot.last ? robot.last->data_held : std::map<std::string, std::uint32_t>{};
   r["rejected_samples"] = robot.last ? robot.last->rejected_samples : 0U;
   r["rendezvous"] = robot.last ? ScoreRendezvous(robot.frame, *robot.last) : nlohmann::json::array();
   return r;
+}
+
+std::set<int> RunEvaluator::UnionReach(const RobotRun& robot, bool reachable_only) const {
+  std::set<int> reach;
+  for (const auto& l : robot.reached) reach.insert(l.first);
+  if (!robot.last) return reach;
+  for (const auto& peer : robot.last->frames_known) {
+    const auto it = robots_.find(peer);
+    if (it == robots_.end()) continue;
+    std::uint32_t until = std::numeric_limits<std::uint32_t>::max();
+    if (reachable_only) {
+      const auto held = robot.last->data_held.find(peer);
+      if (held == robot.last->data_held.end()) continue;  // nothing of it reached the agent
+      until = held->second;
+    }
+    for (const auto& [l, first_step] : it->second.reached) {
+      if (first_step <= until) reach.insert(l);
+    }
+  }
+  return reach;
 }
 
 void RunEvaluator::WriteStep(const std::string& id, const RobotEstimate& est, const StepScore& score, RobotRun* robot) {

@@ -90,9 +90,9 @@ class RunEvaluator {
     // What the agent's estimator held (RobotEstimate::estimator_bytes): at the newest step scored,
     // and the most over the run.
     std::uint64_t estimator_bytes_final = 0, estimator_bytes_max = 0;
-    std::set<int> reached;       // true landmarks ever within its reach
-    TruthPath truth_own;         // its true pose in G_i by step
-    double online_sum_sq = 0.0;  // its online path as a final trajectory
+    std::map<int, std::uint32_t> reached;  // true landmarks ever within its reach: the first step
+    TruthPath truth_own;                   // its true pose in G_i by step
+    double online_sum_sq = 0.0;            // its online path as a final trajectory
     std::size_t online_count = 0;
     std::map<std::uint32_t, std::vector<FinalPose>> final_chunks;
     std::ofstream tum_estimate, tum_truth, tum_final;
@@ -108,6 +108,10 @@ class RunEvaluator {
   void ScoreSteps(bool finishing);
   void ScoreStep(const std::string& id, RobotRun* robot, const RobotEstimate& est, const common::Odometry* odo);
   void WriteStep(const std::string& id, const RobotEstimate& estimate, const StepScore& score, RobotRun* robot);
+  // The landmarks within the reach of the robot (the whole run) or of a robot whose frame it
+  // knows at the end: over that robot's whole run, or (reachable_only) over the steps of it whose
+  // data reached the agent (RobotEstimate::data_held).
+  std::set<int> UnionReach(const RobotRun& robot, bool reachable_only) const;
   // The robot's summary entry; the union completeness over the robots whose frame it knows.
   nlohmann::json RobotSummaryJson(const std::string& id, const RobotRun& robot) const;
   // The robot's final trajectory (the agent's, else its online path), scored against the truth
