@@ -191,6 +191,11 @@ std::int64_t OriginKey(int origin_robot, std::uint32_t origin_track) {
   return origin_robot < 0 ? -1 : (static_cast<std::int64_t>(origin_robot) << 32) | origin_track;
 }
 
+MatchCandidate CandidateOf(const MapLandmark& l) {
+  return {l.mean.head<2>(), l.covariance.topLeftCorner<2, 2>(), l.landmark_id,
+          OriginKey(l.origin_robot, l.origin_track), !l.moving};
+}
+
 std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const std::vector<MatchCandidate>& incoming,
                                 double gate_d2, double too_close_m) {
   // (distance, incoming, own); identity matches get distance -1 so that they come first.

@@ -69,6 +69,9 @@ struct MatchCandidate {
 // One number for a provenance (robot index, track id); -1 when the robot is unknown (< 0).
 std::int64_t OriginKey(int origin_robot, std::uint32_t origin_track);
 
+// A map landmark as a candidate: its position, identity and provenance; stationary unless moving.
+MatchCandidate CandidateOf(const MapLandmark& l);
+
 // Matches incoming landmarks to own ones, one to one: when both carry reported identities they
 // match exactly when the identities are equal; landmarks of the same provenance (equal origin
 // keys) match as identities do; otherwise a pair is a candidate when the squared Mahalanobis

@@ -78,6 +78,7 @@ void OnlineSmoother::Process(const common::SensorStep& step) {
   front_end_->Process(step);
   front_ = front_end_->Estimate();
   graph_.AddMotion(calibration_.Step(step.odometry, step.lidar.stamp.time_s, options_.dt_s));
+  CountPeerMisses(step);
   std::vector<KeyframeGraph::Reading> readings = LabelledReadings(step, front_);
   ++since_keyframe_;
   if (readings.empty() && since_keyframe_ < options_.filter.smoother.max_keyframe_gap_steps) return;
@@ -86,6 +87,15 @@ void OnlineSmoother::Process(const common::SensorStep& step) {
   graph_.AddKeyframe(step_, readings);
   graph_.Solve();
   CheckLost(step_);
+}
+
+void OnlineSmoother::CountPeerMisses(const common::SensorStep& step) {
+  if (peers_.size() == 0) return;
+  // The pose of this step: the graph's newest keyframe moved on by the odometry since.
+  const Pose2 pose = graph_.Pose();
+  const Eigen::Matrix3d cov = graph_.PoseCovariance();
+  peers_.CountMisses(pose, cov.topLeftCorner<2, 2>(), cov(2, 2), step.lidar.landmarks, options_.sensors.lidar,
+                     common::ChiSquare2Quantile(options_.cooperation.match_gate_probability));
 }
 
 OnlineSmoother::Support OnlineSmoother::Explain(const Pose2& x) const {
@@ -113,8 +123,7 @@ OnlineSmoother::Support OnlineSmoother::Explain(const Pose2& x) const {
   }
   for (const auto& l : landmarks) {
     const common::RangeBearing h = common::MeasureRangeBearing(x, l.mean);
-    if (h.range_m < 0.9 * lidar.max_range_m && h.range_m > lidar.min_range_m &&
-        std::abs(h.bearing_rad) < 0.45 * lidar.fov_rad) {
+    if (WellInView(h, lidar)) {
       ++out.in_view;
       out.seen += seen.count(l.track) > 0 ? 1 : 0;
     }
@@ -229,11 +238,12 @@ std::vector<MapLandmark> OnlineSmoother::GraphLandmarks(int step) const {
 
 void OnlineSmoother::Io(common::Archive& ar) {
   front_end_->Io(ar);
-  ar(calibration_, graph_, front_, step_, since_keyframe_, lost_keyframes_, lost_since_step_, recoveries_);
+  ar(calibration_, graph_, front_, step_, since_keyframe_, lost_keyframes_, lost_since_step_, recoveries_, peers_);
 }
 
 std::size_t OnlineSmoother::EstimatorBytes() const {
-  return sizeof(*this) + front_end_->EstimatorBytes() + filters::EstimateBytes(front_) + graph_.EstimatorBytes();
+  return sizeof(*this) + front_end_->EstimatorBytes() + filters::EstimateBytes(front_) + graph_.EstimatorBytes() +
+         peers_.Bytes();
 }
 
 FilterEstimate OnlineSmoother::Estimate() const {
@@ -262,12 +272,19 @@ FilterEstimate OnlineSmoother::Estimate() const {
     m.covariance.block<1, 2>(2, 0) = m.covariance.block<2, 1>(0, 2).transpose();
     out.landmarks.push_back(m);
   }
+  peers_.AppendUnmatched(&out.landmarks, common::ChiSquare2Quantile(options_.cooperation.match_gate_probability),
+                         options_.cooperation.merge_min_separation_m);
   return out;
 }
 
 int OnlineSmoother::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                                    double gate_probability, double too_close_m) {
-  return front_end_->MergeLandmarks(landmarks_in_own_frame, rule, gate_probability, too_close_m);
+  std::vector<MapLandmark> moving;
+  for (const MapLandmark& l : landmarks_in_own_frame) {
+    if (l.moving) moving.push_back(l);
+  }
+  const int added = moving.empty() ? 0 : front_end_->MergeLandmarks(moving, rule, gate_probability, too_close_m);
+  return added + peers_.Merge(landmarks_in_own_frame, common::ChiSquare2Quantile(gate_probability), too_close_m);
 }
 
 }  // namespace mrslam::robot_agent::smoother

@@ -9,6 +9,7 @@
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/options/agent_options.h"
 #include "robot_agent/smoother/keyframe_graph.h"
+#include "robot_agent/smoother/peer_landmarks.h"
 
 namespace mrslam::robot_agent::smoother {
 
@@ -21,7 +22,9 @@ namespace mrslam::robot_agent::smoother {
 // * tells static landmarks from moving ones: a track enters the graph once the front end maps it
 //   as confirmed and static; a moving track is reported from the front end, re-anchored on the
 //   graph's pose (its position relative to the front end's pose, placed relative to the graph's);
-// * receives peers' maps (MergeLandmarks), which inform its association.
+// * receives peers' moving landmarks (MergeLandmarks; those of known kinematics), which inform its
+//   association. Peers' static landmarks are held apart (PeerLandmarks) and shown in the map
+//   where the own map has nothing, without entering the estimate.
 // A keyframe is made at every step with landmark readings and at least every
 // max_keyframe_gap_steps steps. Each step reports the newest pose with its marginal covariance
 // (the correction's uncertainty included) and the landmarks with theirs.
@@ -73,6 +76,8 @@ class OnlineSmoother : public filters::SlamFilter {
   };
   Support Explain(const common::Pose2& x) const;
   void CheckLost(int step);
+  // PeerLandmarks::CountMisses for the step's scan.
+  void CountPeerMisses(const common::SensorStep& step);
   bool Recover(const Support& now);
 
   AgentOptions options_;
@@ -85,6 +90,7 @@ class OnlineSmoother : public filters::SlamFilter {
   int lost_keyframes_ = 0;
   int lost_since_step_ = -1;  // the first keyframe of the current run of misfits
   int recoveries_ = 0;
+  PeerLandmarks peers_;
 };
 
 }  // namespace mrslam::robot_agent::smoother
