@@ -615,6 +615,14 @@ Pose2 KeyframeGraph::Pose() const {
   return common::Compose(window_.back().pose, OdometryIncrement(pending_, correction_));
 }
 
+std::vector<Pose2> KeyframeGraph::KeyframePoses() const {
+  std::vector<Pose2> out;
+  out.reserve(history_.size() + window_.size());
+  for (const Keyframe& k : history_) out.push_back(k.pose);
+  for (const Keyframe& k : window_) out.push_back(k.pose);
+  return out;
+}
+
 Eigen::Matrix3d KeyframeGraph::PoseCovariance() const {
   const Pose2& kf = window_.back().pose;
   const OdometryIncrementJacobians increment = OdometryIncrementWithJacobian(pending_, correction_);

@@ -147,6 +147,9 @@ class KeyframeGraph {
   // factors (none marginalized; the prior is the calibration's alone) solved at once, started
   // from the current estimates, to convergence. The final map product of a run.
   std::vector<std::pair<int, common::Pose2>> SmoothAll() const;
+  // Every keyframe's pose as it stands: the marginalized ones as they left the window, then the
+  // window's.
+  std::vector<common::Pose2> KeyframePoses() const;
   // The readings of the newest keyframe and whether each is within the gate at the solution.
   std::vector<std::pair<Reading, bool>> NewestReadings() const;
   int WindowSize() const { return static_cast<int>(window_.size()); }

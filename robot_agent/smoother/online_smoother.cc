@@ -91,10 +91,21 @@ void OnlineSmoother::Process(const common::SensorStep& step) {
 
 void OnlineSmoother::CountPeerMisses(const common::SensorStep& step) {
   if (peers_.size() == 0) return;
+  // A reading of a landmark the front end sees move does not explain a static one.
+  std::set<std::uint32_t> moving;
+  for (const MapLandmark& l : front_.landmarks) {
+    if (l.moving) moving.insert(l.track_id);
+  }
+  std::vector<common::LandmarkDetection> readings;
+  const auto& scan = step.lidar.landmarks;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (i >= front_.detection_tracks.size() || moving.count(front_.detection_tracks[i]) == 0)
+      readings.push_back(scan[i]);
+  }
   // The pose of this step: the graph's newest keyframe moved on by the odometry since.
   const Pose2 pose = graph_.Pose();
   const Eigen::Matrix3d cov = graph_.PoseCovariance();
-  peers_.CountMisses(pose, cov.topLeftCorner<2, 2>(), cov(2, 2), step.lidar.landmarks, options_.sensors.lidar,
+  peers_.CountMisses(pose, cov.topLeftCorner<2, 2>(), cov(2, 2), readings, options_.sensors.lidar,
                      common::ChiSquare2Quantile(options_.cooperation.match_gate_probability));
 }
 
@@ -284,7 +295,8 @@ int OnlineSmoother::MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_
     if (l.moving) moving.push_back(l);
   }
   const int added = moving.empty() ? 0 : front_end_->MergeLandmarks(moving, rule, gate_probability, too_close_m);
-  return added + peers_.Merge(landmarks_in_own_frame, common::ChiSquare2Quantile(gate_probability), too_close_m);
+  return added + peers_.Merge(landmarks_in_own_frame, graph_.KeyframePoses(), options_.sensors.lidar,
+                              common::ChiSquare2Quantile(gate_probability), too_close_m);
 }
 
 }  // namespace mrslam::robot_agent::smoother

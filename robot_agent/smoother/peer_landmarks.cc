@@ -31,10 +31,20 @@ bool WellInView(const common::RangeBearing& h, const common::LidarOptions& lidar
          std::abs(h.bearing_rad) < 0.45 * lidar.fov_rad;
 }
 
-int PeerLandmarks::Merge(const std::vector<filters::MapLandmark>& in, double gate_d2, double too_close_m) {
+int PeerLandmarks::Merge(const std::vector<filters::MapLandmark>& in, const std::vector<common::Pose2>& looked_from,
+                         const common::LidarOptions& lidar, double gate_d2, double too_close_m) {
+  const int looks_enough = MissesToDrop(lidar.detection_probability);
+  const auto looked_at = [&](const filters::MapLandmark& l) {
+    int looks = 0;
+    for (const common::Pose2& x : looked_from) {
+      looks += WellInView(common::MeasureRangeBearing(x, l.mean.head<2>()), lidar) ? 1 : 0;
+      if (looks >= looks_enough) return true;
+    }
+    return false;
+  };
   std::vector<filters::MapLandmark> usable;
   for (const auto& l : in) {
-    if (Usable(l)) usable.push_back(l);
+    if (Usable(l) && !looked_at(l)) usable.push_back(l);
   }
   const std::vector<int> match = filters::MatchLandmarks(HeldCandidates(), Candidates(usable), gate_d2, too_close_m);
   int added = 0;

@@ -30,14 +30,18 @@ class PeerLandmarks {
   static constexpr std::uint32_t kFirstTrack = 0x80000000U;
 
   // Takes in a peer's landmarks given in the own frame: the static ones (not moving, confirmed,
-  // with a positive definite position covariance). One matching a held landmark
-  // (filters::MatchLandmarks: identity, provenance, else the chi-square gate gate_d2) replaces
-  // it, keeping its track id; the others are added, unless within too_close_m of a held one.
-  // Returns how many were added.
-  int Merge(const std::vector<filters::MapLandmark>& in, double gate_d2, double too_close_m);
+  // with a positive definite position covariance) that do not lie where the robot has looked:
+  // well inside its view (WellInView) from MissesToDrop or more of the poses looked_from (there
+  // its own map stands; a static landmark it lacks there is most likely one that moves). One
+  // matching a held landmark (filters::MatchLandmarks: identity, provenance, else the chi-square
+  // gate gate_d2) replaces it, keeping its track id; the others are added, unless within
+  // too_close_m of a held one. Returns how many were added.
+  int Merge(const std::vector<filters::MapLandmark>& in, const std::vector<common::Pose2>& looked_from,
+            const common::LidarOptions& lidar, double gate_d2, double too_close_m);
   // Appends to map the held landmarks that match none of its own (same rule).
   void AppendUnmatched(std::vector<filters::MapLandmark>* map, double gate_d2, double too_close_m) const;
-  // Counts the misses of one step's scan taken at pose (position covariance pose_xy, heading
+  // Counts the misses of one step's scan (readings: those that may explain a static landmark)
+  // taken at pose (position covariance pose_xy, heading
   // variance heading_var). A held landmark at range r is explained by a reading at position z
   // when d = z - l has d^T (P_l + pose_xy + s^2 I)^-1 d <= gate_d2, s^2 = sd_r^2 + r^2 (sd_b^2 +
   // heading_var); it is missed when none does while it lies well inside the view (WellInView).
