@@ -82,6 +82,7 @@ const std::vector<std::string>& AggregatedMetrics() {
                                                    "static_landmark_rmse_m",
                                                    "moving_landmark_rmse_m",
                                                    "own_landmark_rmse_m",
+                                                   "adopted_landmark_nees",
                                                    "dead_reckoning_rmse_m",
                                                    "map_completeness",
                                                    "moving_completeness",

@@ -36,7 +36,9 @@ common::GroundTruth Truth() {
 
 // A landmark's true position in G, as a map entry.
 MapPoint InOwnFrame(const Pose2& world_pose) {
-  return {common::TransformPoint(common::Inverse(kFrame), world_pose.Translation()), -1};
+  MapPoint p;
+  p.position_m = common::TransformPoint(common::Inverse(kFrame), world_pose.Translation());
+  return p;
 }
 
 common::Odometry Forward(double v_mps, double dt_s) {
@@ -131,6 +133,21 @@ TEST(RobotScorerTest, TheOwnLandmarkFigureCountsOnlyWhatTheRobotCouldHaveObserve
   const RobotSummary s = scorer.Summary();
   EXPECT_NEAR(s.own_landmark_rmse_m, 0.2, kTol);
   EXPECT_NEAR(s.landmark_rmse_m, std::sqrt((0.04 + 1.0) / 2.0), kTol);
+}
+
+TEST(RobotScorerTest, AdoptedLandmarkNeesCountsOnlyLandmarksTakenFromOtherRobots) {
+  RobotScorer scorer(kFrame, Pose2{}, Lidar(5.0), /*robot_index=*/0);
+  MapPoint own = InOwnFrame(Truth().landmarks[0].pose);
+  own.position_m.x() += 1.0;  // its own, far off: not counted
+  own.covariance_m2 = 0.01 * Eigen::Matrix2d::Identity();
+  own.origin_robot = 0;
+  MapPoint handed = InOwnFrame(Truth().landmarks[1].pose);
+  handed.position_m += Eigen::Vector2d(0.3, 0.4);  // from robot 2, with sd 0.5 m in x and 0.2 m in y
+  handed.covariance_m2 = Eigen::Vector2d(0.25, 0.04).asDiagonal();
+  handed.origin_robot = 2;
+  EXPECT_TRUE(std::isnan(RobotScorer(kFrame, Pose2{}, Lidar(5.0), 0).Summary().adopted_landmark_nees));
+  scorer.Add(Truth(), kFrame, Pose2{}, std::nullopt, {own, handed}, nullptr);
+  EXPECT_NEAR(scorer.Summary().adopted_landmark_nees, 0.09 / 0.25 + 0.16 / 0.04, kTol);
 }
 
 TEST(RobotScorerTest, WithoutMoversMovingFiguresAreNeutral) {

@@ -29,8 +29,9 @@ RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
   e.effective_sample_size = m.effective_sample_size();
   for (const auto& l : m.landmarks()) {
     if (l.tentative()) continue;
-    e.landmarks.push_back({Eigen::Vector2d(l.pose().x_m(), l.pose().y_m()), l.landmark_id()});
     e.shown_landmarks.push_back(ToMapLandmark(l));
+    e.landmarks.push_back({e.shown_landmarks.back().position_m, l.landmark_id(), e.shown_landmarks.back().covariance_m2,
+                           l.origin_robot()});
   }
   e.frames_known = m.frames_known();
   for (const auto& h : m.data_held()) e.data_held[h.robot_id()] = h.steps();

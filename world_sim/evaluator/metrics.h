@@ -17,6 +17,10 @@ namespace mrslam::evaluator {
 struct MapPoint {
   Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
   int landmark_id = -1;  // reported identity, -1 if unknown
+  // Its position covariance as the map reports it (zero when unknown), and the robot (scenario
+  // index) that first mapped it, -1 if unknown (a landmark taken from a peer names the peer).
+  Eigen::Matrix2d covariance_m2 = Eigen::Matrix2d::Zero();
+  int origin_robot = -1;
 };
 
 // A true landmark at one step, in the world frame.

@@ -3,13 +3,16 @@
 #include <cmath>
 #include <string>
 
+#include <Eigen/Cholesky>
+
 #include "common/angles.h"
+#include "common/gaussian.h"
 
 namespace mrslam::evaluator {
 
 RobotScorer::RobotScorer(const common::Pose2& frame_in_world, const common::Pose2& dead_reckoning_start,
-                         const common::LidarOptions& lidar)
-    : frame_(frame_in_world), dead_reckoning_(dead_reckoning_start), lidar_(lidar) {}
+                         const common::LidarOptions& lidar, int robot_index)
+    : frame_(frame_in_world), dead_reckoning_(dead_reckoning_start), lidar_(lidar), robot_index_(robot_index) {}
 
 bool InLidarReach(const common::LidarOptions& lidar, const common::Pose2& pose, const Eigen::Vector2d& point) {
   const auto z = common::MeasureRangeBearing(pose, point);
@@ -47,12 +50,16 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
     }
   }
   in_map_.clear();
-  for (const LandmarkMatch& match : MatchLandmarks(landmarks, true_points, frame_)) {
+  const std::vector<LandmarkMatch> matches = MatchLandmarks(landmarks, true_points, frame_);
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    const LandmarkMatch& match = matches[i];
     s.landmark_errors_m.push_back(match.error_m);
     const bool mover = match.truth_index >= 0 && moving[static_cast<std::size_t>(match.truth_index)];
     (mover ? moving_landmark_err_ : static_landmark_err_).Add(match.error_m);
     if (match.truth_index < 0) continue;
-    const int id = true_points[static_cast<std::size_t>(match.truth_index)].landmark_id;
+    const TruePoint& truth_point = true_points[static_cast<std::size_t>(match.truth_index)];
+    AddAdopted(landmarks[i], truth_point.position_m);
+    const int id = truth_point.landmark_id;
     in_map_.insert(id);
     if (seen_.count(id) > 0) own_landmark_err_.Add(match.error_m);
   }
@@ -71,6 +78,14 @@ double RobotScorer::Completeness(const std::set<int>& seen, const std::set<int>&
   return static_cast<double>(kept) / static_cast<double>(seen.size());
 }
 
+void RobotScorer::AddAdopted(const MapPoint& l, const Eigen::Vector2d& truth_w) {
+  if (l.origin_robot < 0 || l.origin_robot == robot_index_) return;
+  if (!common::IsSymmetricPositiveDefinite<2>(l.covariance_m2)) return;
+  const Eigen::Vector2d e = l.position_m - common::TransformPoint(common::Inverse(frame_), truth_w);
+  adopted_nees_sum_ += e.dot(l.covariance_m2.ldlt().solve(e));
+  ++adopted_nees_count_;
+}
+
 RobotSummary RobotScorer::Summary() const {
   RobotSummary r;
   r.position_rmse_m = position_err_.Value();
@@ -81,6 +96,8 @@ RobotSummary RobotScorer::Summary() const {
   r.own_landmark_rmse_m = own_landmark_err_.Value();
   r.dead_reckoning_rmse_m = dead_reckoning_err_.Value();
   r.mean_nees = nees_count_ == 0 ? 0.0 : nees_sum_ / static_cast<double>(nees_count_);
+  r.adopted_landmark_nees =
+      adopted_nees_count_ == 0 ? std::nan("") : adopted_nees_sum_ / static_cast<double>(adopted_nees_count_);
   r.landmarks_mapped = mapped_;
   r.map_completeness = completeness_;
   r.moving_completeness = moving_completeness_;

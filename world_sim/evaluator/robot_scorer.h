@@ -37,6 +37,10 @@ struct RobotSummary {
   // by then (what it could have observed, not what peers handed it; one matched to a landmark
   // never in reach, or to none, is left out; 0 when none is left).
   double own_landmark_rmse_m = 0.0;
+  // The mean position NEES (2 dof) of the map landmarks taken from other robots (their
+  // provenance names another robot), over the steps and those with a true partner and a
+  // positive definite covariance; NaN when there were none.
+  double adopted_landmark_nees = 0.0;
   double dead_reckoning_rmse_m = 0.0;  // over the steps with odometry
   double mean_nees = 0.0;              // over the steps with a finite NEES; 0 for none
   std::size_t landmarks_mapped = 0;    // at the last step
@@ -54,9 +58,10 @@ bool InLidarReach(const common::LidarOptions& lidar, const common::Pose2& pose, 
 class RobotScorer {
  public:
   // frame_in_world: the robot's own frame G_i; dead_reckoning_start: its first pose in G_i; the
-  // lidar's reach decides which landmarks the robot could have sensed.
+  // lidar's reach decides which landmarks the robot could have sensed; robot_index: its index in
+  // the scenario (the provenance of the landmarks it mapped itself), -1 if unknown.
   RobotScorer(const common::Pose2& frame_in_world, const common::Pose2& dead_reckoning_start,
-              const common::LidarOptions& lidar);
+              const common::LidarOptions& lidar, int robot_index = -1);
 
   // One step: the truth (robot_truth: this robot's true pose in W), the estimate in G_i (without
   // a covariance the NEES is not scored) and the step's odometry, if any, which advances the
@@ -73,6 +78,10 @@ class RobotScorer {
   common::Pose2 frame_;
   common::Pose2 dead_reckoning_;
   common::LidarOptions lidar_;
+  int robot_index_ = -1;
+  // Adds the NEES of map landmark l against the true point truth_w (world frame) if it was taken
+  // from another robot.
+  void AddAdopted(const MapPoint& l, const Eigen::Vector2d& truth_w);
   // Completeness at this step: the share of `seen` that is in the map (1 for none seen).
   static double Completeness(const std::set<int>& seen, const std::set<int>& in_map);
 
@@ -81,6 +90,8 @@ class RobotScorer {
   RunningRmse static_landmark_err_, moving_landmark_err_, own_landmark_err_;
   double nees_sum_ = 0.0;
   std::size_t nees_count_ = 0;
+  double adopted_nees_sum_ = 0.0;
+  std::size_t adopted_nees_count_ = 0;
   std::set<int> seen_;         // true landmark ids ever within the robot's reach
   std::set<int> seen_moving_;  // the moving ones among them
   std::set<int> in_map_;       // true landmark ids in the map at the last step

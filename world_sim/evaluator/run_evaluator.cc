@@ -82,7 +82,7 @@ void RunEvaluator::Start(const common::GroundTruth& truth0) {
     // Dead reckoning from the true initial pose in the robot's own frame.
     const auto* r0 = FindEntity(truth0.robots, id);
     robot.scorer.emplace(robot.frame, r0 != nullptr ? TruthInOwnFrame(r0->pose, robot.frame) : Pose2{},
-                         scenario_.sensors.lidar);
+                         scenario_.sensors.lidar, scenario_.RobotIndex(id));
   }
   started_ = true;
 }
@@ -319,6 +319,7 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["static_landmark_rmse_m"] = s.static_landmark_rmse_m;
   r["moving_landmark_rmse_m"] = s.moving_landmark_rmse_m;
   r["own_landmark_rmse_m"] = s.own_landmark_rmse_m;
+  r["adopted_landmark_nees"] = s.adopted_landmark_nees;
   r["dead_reckoning_rmse_m"] = s.dead_reckoning_rmse_m;
   r["mean_nees"] = s.mean_nees;
   r["landmarks_mapped"] = s.landmarks_mapped;
