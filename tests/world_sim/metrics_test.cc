@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -36,6 +37,33 @@ MapPoint MapAt(double x_g, double y_g, int id = -1) { return {Eigen::Vector2d(x_
 
 // ---------------------------------------------------------------------------------------------
 // Pose errors.
+
+// Two robots' maps of the same landmarks, each in its own frame (b's rotated by 90 degrees):
+// compared in the world, through the true frames, with both covariances.
+TEST(AgreementOfMapsTest, CountsTheCommonLandmarksPlacedWithinThreeSd) {
+  const Pose2 frame_a{0.0, 0.0, 0.0}, frame_b{10.0, 0.0, kPi / 2};
+  const auto in_b = [&](const Eigen::Vector2d& world) {
+    return common::TransformPoint(common::Inverse(frame_b), world);
+  };
+  const auto point = [](const Eigen::Vector2d& p, double variance) {
+    MapPoint m;
+    m.position_m = p;
+    m.covariance_m2 = variance * Eigen::Matrix2d::Identity();
+    return m;
+  };
+  std::map<int, MapPoint> a, b;
+  a[5] = point({1.0, 1.0}, 0.01);
+  b[5] = point(in_b({1.3, 1.0}), 0.01);  // 0.3 m apart: d^2 = 0.09 / 0.02 = 4.5
+  a[6] = point({4.0, 0.0}, 0.01);
+  b[6] = point(in_b({4.0, 1.0}), 0.01);  // 1 m apart: d^2 = 50
+  a[7] = point({2.0, 2.0}, 0.01);        // a's only
+  a[8] = point({3.0, 3.0}, 0.0);         // no usable covariance
+  b[8] = point(in_b({3.0, 3.0}), 0.01);
+  const MapAgreement agreement = AgreementOfMaps(a, frame_a, b, frame_b);
+  EXPECT_EQ(agreement.common, 2);
+  EXPECT_EQ(agreement.within, 1);
+  EXPECT_EQ(AgreementOfMaps(a, frame_a, b, frame_b, 10.0).within, 2);
+}
 
 TEST(TruthInOwnFrameTest, RotatedFrame) {
   // (1, 5, pi) in W: p_G = (5 - 2, 1 - 1) = (3, 0), heading pi - pi/2.

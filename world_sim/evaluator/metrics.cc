@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "common/angles.h"
+#include "common/gaussian.h"
 
 namespace mrslam::evaluator {
 namespace {
@@ -127,6 +128,29 @@ std::vector<int> MatchedTruth(const std::vector<MapPoint>& map, const std::vecto
 // potentials by delta = min over columns outside the tree of minv_j, which keeps the duals
 // feasible and makes one more column tight. The path is then flipped. At the end complementary
 // slackness holds, so the assignment is optimal. O(n^2 m).
+MapAgreement AgreementOfMaps(const std::map<int, MapPoint>& a, const common::Pose2& frame_a,
+                             const std::map<int, MapPoint>& b, const common::Pose2& frame_b, double sd) {
+  const Eigen::Matrix2d rot_a = common::ComposeJacobianRight(frame_a, {}).topLeftCorner<2, 2>();
+  const Eigen::Matrix2d rot_b = common::ComposeJacobianRight(frame_b, {}).topLeftCorner<2, 2>();
+  MapAgreement out;
+  for (const auto& [id, pa] : a) {
+    const auto it = b.find(id);
+    if (it == b.end()) continue;
+    const MapPoint& pb = it->second;
+    const Eigen::Matrix2d c =
+        rot_a * pa.covariance_m2 * rot_a.transpose() + rot_b * pb.covariance_m2 * rot_b.transpose();
+    if (!common::IsSymmetricPositiveDefinite<2>(pa.covariance_m2) ||
+        !common::IsSymmetricPositiveDefinite<2>(pb.covariance_m2)) {
+      continue;
+    }
+    const Eigen::Vector2d d =
+        common::TransformPoint(frame_a, pa.position_m) - common::TransformPoint(frame_b, pb.position_m);
+    ++out.common;
+    out.within += d.dot(c.ldlt().solve(d)) <= sd * sd ? 1 : 0;
+  }
+  return out;
+}
+
 std::vector<int> OptimalAssignment(const Eigen::MatrixXd& cost) {
   const Eigen::Index rows = cost.rows(), cols = cost.cols();
   std::vector<int> row_to_col(static_cast<size_t>(rows), -1);

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,19 @@ std::vector<LandmarkMatch> MatchLandmarks(const std::vector<MapPoint>& map, cons
 // LandmarkErrors within the cut-off), ascending, each once.
 std::vector<int> MatchedTruth(const std::vector<MapPoint>& map, const std::vector<TruePoint>& truth,
                               const common::Pose2& frame_in_world, double cutoff_m = 3.0);
+
+// How two robots' maps agree on the true landmarks both hold (by true id, the map landmark
+// standing for each, in each robot's own frame): of the landmarks both hold with a positive
+// definite covariance, how many there are and how many the two place within sd standard
+// deviations of each other, d^T (C_a' + C_b')^-1 d <= sd^2 with d the difference of the two
+// positions in the world frame (through the robots' true frames) and C' their covariances
+// rotated into it.
+struct MapAgreement {
+  int common = 0;
+  int within = 0;
+};
+MapAgreement AgreementOfMaps(const std::map<int, MapPoint>& a, const common::Pose2& frame_a,
+                             const std::map<int, MapPoint>& b, const common::Pose2& frame_b, double sd = 3.0);
 
 // Minimum-cost assignment (Hungarian algorithm, O(n^2 m) with potentials) of rows to columns of
 // a cost matrix (rows <= columns or not): returns for each row the assigned column or -1. Every

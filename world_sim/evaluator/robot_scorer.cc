@@ -60,7 +60,7 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
     const TruePoint& truth_point = true_points[static_cast<std::size_t>(match.truth_index)];
     AddAdopted(landmarks[i], truth_point.position_m);
     const int id = truth_point.landmark_id;
-    in_map_.insert(id);
+    in_map_.emplace(id, landmarks[i]);
     if (seen_.count(id) > 0) own_landmark_err_.Add(match.error_m);
   }
   for (const double e : s.landmark_errors_m) landmark_err_.Add(e);
@@ -71,7 +71,7 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
   return s;
 }
 
-double RobotScorer::Completeness(const std::set<int>& seen, const std::set<int>& in_map) {
+double RobotScorer::Completeness(const std::set<int>& seen, const std::map<int, MapPoint>& in_map) {
   if (seen.empty()) return 1.0;
   std::size_t kept = 0;
   for (const int id : seen) kept += in_map.count(id);

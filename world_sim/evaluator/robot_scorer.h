@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <optional>
 #include <set>
 #include <vector>
@@ -71,8 +72,9 @@ class RobotScorer {
                 const common::Odometry* odometry);
 
   RobotSummary Summary() const;
-  // The true landmark ids that stand in the map at the last step.
-  const std::set<int>& InMap() const { return in_map_; }
+  // The true landmarks that stand in the map at the last step: by id, the map landmark standing
+  // for each.
+  const std::map<int, MapPoint>& InMap() const { return in_map_; }
 
  private:
   common::Pose2 frame_;
@@ -83,7 +85,7 @@ class RobotScorer {
   // from another robot.
   void AddAdopted(const MapPoint& l, const Eigen::Vector2d& truth_w);
   // Completeness at this step: the share of `seen` that is in the map (1 for none seen).
-  static double Completeness(const std::set<int>& seen, const std::set<int>& in_map);
+  static double Completeness(const std::set<int>& seen, const std::map<int, MapPoint>& in_map);
 
   // Running figures only: the scorer's memory does not grow with the run.
   RunningRmse position_err_, heading_err_deg_, landmark_err_, dead_reckoning_err_;
@@ -92,9 +94,9 @@ class RobotScorer {
   std::size_t nees_count_ = 0;
   double adopted_nees_sum_ = 0.0;
   std::size_t adopted_nees_count_ = 0;
-  std::set<int> seen_;         // true landmark ids ever within the robot's reach
-  std::set<int> seen_moving_;  // the moving ones among them
-  std::set<int> in_map_;       // true landmark ids in the map at the last step
+  std::set<int> seen_;              // true landmark ids ever within the robot's reach
+  std::set<int> seen_moving_;       // the moving ones among them
+  std::map<int, MapPoint> in_map_;  // InMap()
   double completeness_ = 1.0, moving_completeness_ = 1.0;
   std::size_t mapped_ = 0;
 };

@@ -334,6 +334,10 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   };
   r["union_completeness"] = share_mapped(UnionReach(robot, false));
   r["reachable_union_completeness"] = share_mapped(UnionReach(robot, true));
+  const MapAgreement agreement = AgreementWithPeers(robot);
+  r["common_landmarks"] = agreement.common;
+  r["common_landmarks_within_3sd"] =
+      agreement.common == 0 ? 1.0 : static_cast<double>(agreement.within) / static_cast<double>(agreement.common);
   r["steps_scored"] = s.steps_scored;
   r["odometry_steps_lost"] = Lost(robot.odometry_steps, static_cast<std::size_t>(scenario_.run.steps));  // 1..N
   r["step_cpu_ms_median"] = robot.step_cpu_ms.empty() ? 0.0 : Median(robot.step_cpu_ms);
@@ -354,6 +358,20 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["rejected_samples"] = robot.last ? robot.last->rejected_samples : 0U;
   r["rendezvous"] = robot.last ? ScoreRendezvous(robot.frame, *robot.last) : nlohmann::json::array();
   return r;
+}
+
+MapAgreement RunEvaluator::AgreementWithPeers(const RobotRun& robot) const {
+  MapAgreement sum;
+  if (!robot.last) return sum;
+  for (const auto& peer : robot.last->frames_known) {
+    const auto it = robots_.find(peer);
+    if (it == robots_.end() || !it->second.scorer) continue;
+    const MapAgreement a =
+        AgreementOfMaps(robot.scorer->InMap(), robot.frame, it->second.scorer->InMap(), it->second.frame);
+    sum.common += a.common;
+    sum.within += a.within;
+  }
+  return sum;
 }
 
 std::set<int> RunEvaluator::UnionReach(const RobotRun& robot, bool reachable_only) const {
