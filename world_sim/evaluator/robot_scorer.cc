@@ -64,17 +64,17 @@ StepScore RobotScorer::Add(const common::GroundTruth& truth, const common::Pose2
     if (seen_.count(id) > 0) own_landmark_err_.Add(match.error_m);
   }
   for (const double e : s.landmark_errors_m) landmark_err_.Add(e);
-  completeness_ = Completeness(seen_, in_map_);
-  moving_completeness_ = Completeness(seen_moving_, in_map_);
+  completeness_ = Completeness(seen_);
+  moving_completeness_ = Completeness(seen_moving_);
   s.map_completeness = completeness_;
   mapped_ = landmarks.size();
   return s;
 }
 
-double RobotScorer::Completeness(const std::set<int>& seen, const std::map<int, MapPoint>& in_map) {
+double RobotScorer::Completeness(const std::set<int>& seen) const {
   if (seen.empty()) return 1.0;
   std::size_t kept = 0;
-  for (const int id : seen) kept += in_map.count(id);
+  for (const int id : seen) kept += in_map_.count(id);
   return static_cast<double>(kept) / static_cast<double>(seen.size());
 }
 

@@ -75,6 +75,8 @@ class RobotScorer {
   // The true landmarks that stand in the map at the last step: by id, the map landmark standing
   // for each.
   const std::map<int, MapPoint>& InMap() const { return in_map_; }
+  // The share of the true landmarks `seen` that stand in the map at the last step (1 for none).
+  double Completeness(const std::set<int>& seen) const;
 
  private:
   common::Pose2 frame_;
@@ -84,8 +86,6 @@ class RobotScorer {
   // Adds the NEES of map landmark l against the true point truth_w (world frame) if it was taken
   // from another robot.
   void AddAdopted(const MapPoint& l, const Eigen::Vector2d& truth_w);
-  // Completeness at this step: the share of `seen` that is in the map (1 for none seen).
-  static double Completeness(const std::set<int>& seen, const std::map<int, MapPoint>& in_map);
 
   // Running figures only: the scorer's memory does not grow with the run.
   RunningRmse position_err_, heading_err_deg_, landmark_err_, dead_reckoning_err_;

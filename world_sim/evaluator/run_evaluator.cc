@@ -327,13 +327,8 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["moving_completeness"] = s.moving_completeness;
   // Of the landmarks within the reach of this robot or of the robots whose frames it knows, the
   // share in its map at the end.
-  const auto share_mapped = [&](const std::set<int>& reach) {
-    std::size_t mapped = 0;
-    for (const int l : reach) mapped += robot.scorer->InMap().count(l);
-    return reach.empty() ? 1.0 : static_cast<double>(mapped) / static_cast<double>(reach.size());
-  };
-  r["union_completeness"] = share_mapped(UnionReach(robot, false));
-  r["reachable_union_completeness"] = share_mapped(UnionReach(robot, true));
+  r["union_completeness"] = robot.scorer->Completeness(UnionReach(robot, false));
+  r["reachable_union_completeness"] = robot.scorer->Completeness(UnionReach(robot, true));
   const MapAgreement agreement = AgreementWithPeers(robot);
   r["common_landmarks"] = agreement.common;
   r["common_landmarks_within_3sd"] =
