@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <tuple>
 #include <utility>
 
@@ -441,6 +442,29 @@ Cooperation::CommonLandmarks Cooperation::MatchSnapshot(const MapSnapshot& m, co
   return out;
 }
 
+void Cooperation::LinkTracks(const CommonLandmarks& common, PeerState* sender) const {
+  for (std::size_t i = 0; i < common.theirs.size(); ++i) {
+    const filters::MapLandmark& l = common.theirs[i];
+    if (l.track_id > static_cast<std::uint32_t>(std::numeric_limits<int>::max())) continue;
+    const int track = static_cast<int>(l.track_id);
+    std::map<int, int> seen_moving;
+    if (const auto it = sender->tracks.find(track); it != sender->tracks.end() && it->second.kinematics >= 0) {
+      seen_moving[track] = it->second.kinematics;
+    }
+    const auto k = KeptKinematics(seen_moving, track, TrackKinematics(options_.filter, l));
+    if (!k) continue;
+    sender->tracks[track] = {common.match[i] < 0 ? 0 : common.mine[common.match[i]].track_id, *k};
+  }
+}
+
+PeerTrackLinks Cooperation::track_links() const {
+  PeerTrackLinks out;
+  for (const auto& [peer, state] : peers_) {
+    if (!state.tracks.empty()) out[peer] = state.tracks;
+  }
+  return out;
+}
+
 void Cooperation::AlignWithSnapshot(const MapSnapshot& m, const CommonLandmarks& common, PeerState* sender) {
   std::vector<LandmarkPair> pairs;
   for (std::size_t i = 0; i < common.match.size(); ++i) {
@@ -453,13 +477,9 @@ void Cooperation::AlignWithSnapshot(const MapSnapshot& m, const CommonLandmarks&
 }
 
 std::optional<smoother::BatchSmoother::Kinematics> Cooperation::JointKinematics(const filters::MapLandmark& l) const {
-  if (l.motion == filters::LandmarkMotionKind::kStatic) return smoother::BatchSmoother::Kinematics{};
-  if (l.motion != filters::LandmarkMotionKind::kUnicycle || (l.v_mps == 0.0 && l.w_radps == 0.0)) return std::nullopt;
-  // The filter's (v, w) is a weighted mean over its particles' candidates: the nearest one.
-  const int c = filters::NearestKnownKinematics(options_.filter.known_kinematics, l.v_mps, l.w_radps);
-  if (c < 0) return std::nullopt;
-  const KnownKinematics& k = options_.filter.known_kinematics[c];
-  return smoother::BatchSmoother::Kinematics{k.v_mps == 0.0 && k.w_radps == 0.0, k.v_mps, k.w_radps};
+  const auto k = TrackKinematics(options_.filter, l);
+  if (!k) return std::nullopt;
+  return KinematicsOf(options_.filter, *k);
 }
 
 std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& m, const filters::FilterEstimate& own,
@@ -493,17 +513,6 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
     }
   }
   if (shared == 0) return std::nullopt;
-  auto relabel = [](const common::SensorStep& s, const std::map<int, int>& labels) {
-    common::SensorStep out = s;
-    out.lidar.landmarks.clear();
-    for (auto d : s.lidar.landmarks) {
-      const auto it = labels.find(d.landmark_id);
-      if (it == labels.end()) continue;
-      d.landmark_id = it->second;
-      out.lidar.landmarks.push_back(d);
-    }
-    return out;
-  };
   // The sender's first pose in the own frame, started from the held transform.
   smoother::BatchSmoother joint(options_,
                                 {{robot_id_, first_pose_}, {m.header.sender, common::Compose(held.t, m.first_pose)}},
@@ -515,7 +524,7 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
   // for hundreds of steps.
   std::size_t next_solve = 5;
   for (std::size_t t = 0; t < history_.size(); ++t) {
-    joint.Add({relabel(history_[t], own_label), relabel(m.history[t], their_label)});
+    joint.Add({Relabelled(history_[t], own_label), Relabelled(m.history[t], their_label)});
     if (t + 1 == next_solve || t + 1 == history_.size()) {
       joint.Solve();
       next_solve = std::max(next_solve + 5, (t + 1) * 5 / 4);
@@ -560,6 +569,7 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, filters::SlamFilter* filte
   if (filter != nullptr) {
     const filters::FilterEstimate own = filter->Estimate();
     const CommonLandmarks common = MatchSnapshot(m, own, *sender.transform);
+    LinkTracks(common, &sender);
     if (const auto joint = JointTransform(m, own, common, *sender.transform)) {
       HoldTransform(&sender, *joint, m.header.step);
       joint_estimates_.push_back({m.header.sender, m.header.step, joint->t, joint->Covariance()});

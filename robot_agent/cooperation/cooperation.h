@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "robot_agent/cooperation/factor_exchange.h"
+#include "robot_agent/cooperation/joint_chains.h"
 #include "robot_agent/cooperation/peer_messages.h"
 #include "robot_agent/cooperation/rendezvous.h"
 #include "robot_agent/filters/slam_filter.h"
@@ -65,6 +66,9 @@ class Cooperation {
   // Every transform estimated jointly from both robots' histories (cooperation.joint_transform),
   // in order: the peer, the snapshot's step, the estimate.
   const std::vector<FrameTransform>& joint_estimates() const { return joint_estimates_; }
+  // Per peer whose map snapshot arrived: its tracks, each with the own track it was matched to
+  // and its kinematics (the newest snapshot's word on a track).
+  PeerTrackLinks track_links() const;
   // The raw measurements held, the own and the peers' (cooperation.share_factors).
   const FactorExchange& exchange() const { return exchange_; }
   // Landmark-moved notices accepted so far (the ELA filter will use them).
@@ -114,11 +118,12 @@ class Cooperation {
     bool transforms_due = false;  // the transforms only (an encounter that is not a rendezvous)
     // The last step applied per message kind (older ones are stale).
     std::optional<std::uint32_t> last_measurement_step, last_snapshot_step, last_notice_step;
+    std::map<int, TrackLink> tracks;  // its tracks in its snapshots (LinkTracks)
 
     void Io(common::Archive& ar) {
       ar(transform, met, last_detection_outlier, transform_step, own_detections, peer_measurements, in_encounter,
          encounter_first, encounter_last, encounter_pairs, event_index, last_rendezvous_step, snapshot_due,
-         transforms_due, last_measurement_step, last_snapshot_step, last_notice_step);
+         transforms_due, last_measurement_step, last_snapshot_step, last_notice_step, tracks);
     }
   };
 
@@ -141,6 +146,8 @@ class Cooperation {
   };
   CommonLandmarks MatchSnapshot(const MapSnapshot& m, const filters::FilterEstimate& own,
                                 const TransformEstimate& held) const;
+  // Keeps the sender's tracks in `common` with their kinematics and the own tracks they matched.
+  void LinkTracks(const CommonLandmarks& common, PeerState* sender) const;
   // Refines the transform to the snapshot's sender by the landmarks both maps hold (aligned by
   // AlignLandmarks with the held one as prior).
   void AlignWithSnapshot(const MapSnapshot& m, const CommonLandmarks& common, PeerState* sender);

@@ -4,6 +4,12 @@
 #include <cmath>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
+#include "common/angles.h"
+#include "common/gaussian.h"
+#include "robot_agent/cooperation/rendezvous.h"
+
 namespace mrslam::robot_agent::cooperation {
 namespace {
 
@@ -18,6 +24,7 @@ Eigen::Matrix3d Rotation(double heading) {
 
 JointTracker::JointTracker(const AgentOptions& options)
     : options_(options),
+      chains_(options),
       every_steps_(
           options.cooperation.joint_every_s > 0.0
               ? static_cast<std::uint32_t>(std::max(1.0, std::round(options.cooperation.joint_every_s / options.dt_s)))
@@ -26,7 +33,8 @@ JointTracker::JointTracker(const AgentOptions& options)
 }
 
 bool JointTracker::Enabled(const AgentOptions& options) {
-  return options.cooperation.share_factors && options.filter.landmark_kinematics == LandmarkKinematics::kStatic;
+  return options.cooperation.share_factors &&
+         options.filter.landmark_kinematics != LandmarkKinematics::kConstantTurnRate;
 }
 
 JointEstimate JointTracker::Solve(const std::map<std::string, FactorLog>& logs, bool to_convergence) {
@@ -41,7 +49,24 @@ JointEstimate JointTracker::Solve(const std::map<std::string, FactorLog>& logs, 
 }
 
 void JointTracker::AfterStep(std::uint32_t k, const filters::FilterEstimate& estimate,
-                             const std::map<std::string, FactorLog>& logs, std::uint64_t steps_received) {
+                             const std::map<std::string, FactorLog>& logs, std::uint64_t steps_received,
+                             const PeerTrackLinks& links, const std::vector<FrameTransform>& frames) {
+  if (AmongMovers()) {
+    if (const auto joint = chains_.Update(k, estimate, logs, links, frames)) {
+      // A joint estimate beyond the filter's own uncertainty is not taken (a wrong match or
+      // kinematics among the peers' tracks): the filter's stands.
+      const common::Pose2& pose = joint->pose;
+      const Eigen::Vector3d d(pose.x - estimate.pose.x, pose.y - estimate.pose.y,
+                              common::WrapAngle(pose.heading - estimate.pose.heading));
+      const bool within = d.allFinite() && d.dot(estimate.covariance.ldlt().solve(d)) <=
+                                               ChiSquare3Quantile(options_.cooperation.transform_gate_probability);
+      correction_ = within ? common::Compose(pose, common::Inverse(estimate.pose)) : common::Pose2{};
+      pose_covariance_.reset();
+      if (within && common::IsSymmetricPositiveDefinite<3>(joint->covariance)) pose_covariance_ = joint->covariance;
+      ++solves_;
+    }
+    return;
+  }
   if (every_steps_ == 0 || k < next_due_) return;
   // Due at the multiples of every_steps_ only, the same steps for every agent: in lockstep the
   // agents' solves then run side by side, not one after the other while the rest wait.
@@ -59,7 +84,7 @@ filters::FilterEstimate JointTracker::Corrected(filters::FilterEstimate estimate
   if (solves_ == 0) return estimate;
   const Eigen::Matrix3d r = Rotation(correction_.heading);
   estimate.pose = common::Compose(correction_, estimate.pose);
-  estimate.covariance = r * estimate.covariance * r.transpose();
+  estimate.covariance = pose_covariance_ ? *pose_covariance_ : Eigen::Matrix3d(r * estimate.covariance * r.transpose());
   for (auto& l : estimate.landmarks) {
     const common::Pose2 p = common::Compose(correction_, common::Pose2::FromVector(l.mean));
     l.mean = p.Vector();
@@ -68,6 +93,8 @@ filters::FilterEstimate JointTracker::Corrected(filters::FilterEstimate estimate
   return estimate;
 }
 
-JointEstimate JointTracker::Final(const std::map<std::string, FactorLog>& logs) { return Solve(logs, true); }
+JointEstimate JointTracker::Final(const std::map<std::string, FactorLog>& logs) {
+  return AmongMovers() ? chains_.Summary() : Solve(logs, true);
+}
 
 }  // namespace mrslam::robot_agent::cooperation

@@ -373,28 +373,36 @@ struct AgentNode::Impl {
     return static_cast<std::uint32_t>(chunks.size());
   }
 
-  // With sharing among static landmarks: the joint estimate solved again when due, and logged.
+  // With sharing: the joint estimate solved again when due, and logged (among moving landmarks,
+  // where it is solved every step, the first solve only).
   void TrackJoint(std::uint32_t k, const filters::FilterEstimate& estimate) {
     const int before = joint_tracker.solves();
     const auto& x = cooperation.exchange();
-    joint_tracker.AfterStep(k, estimate, x.logs(), x.steps_received());
-    if (joint_tracker.solves() == before) return;
+    joint_tracker.AfterStep(k, estimate, x.logs(), x.steps_received(), cooperation.track_links(),
+                            cooperation.known_transforms());
+    if (joint_tracker.solves() == before ||
+        (before > 0 && agent.filter.landmark_kinematics != LandmarkKinematics::kStatic))
+      return;
     const common::Pose2& c = joint_tracker.correction();
     spdlog::info("joint estimate at step {}: the own estimate moved by ({:.3f}, {:.3f}, {:.4f} rad)", k, c.x, c.y,
                  c.heading);
   }
 
   // The final trajectory: with the raw measurements shared, the own ones held to step k and the
-  // landmarks taken as static (the joint graph has no model of moving ones), the own path of the
-  // joint estimate over everything held; else the estimator's.
+  // landmarks' kinematics modelled (static or known candidates), the own path of the joint
+  // estimate over everything held, when it reaches step k; else the estimator's.
   std::vector<std::pair<int, common::Pose2>> FinalPath(std::uint32_t k) {
     const auto& x = cooperation.exchange();
     if (!agent.cooperation.share_factors || x.Held(agent.robot_id) < k) return filter->FinalTrajectory();
     if (!cooperation::JointTracker::Enabled(agent)) {
-      spdlog::info("final trajectory: the estimator's, as the joint graph models static landmarks only");
+      spdlog::info("final trajectory: the estimator's, as the joint estimate has no model of its landmarks' motion");
       return filter->FinalTrajectory();
     }
     const auto joint = joint_tracker.Final(x.logs());
+    if (joint.path.empty() || joint.path.back().first != static_cast<int>(k)) {
+      spdlog::info("final trajectory: the estimator's, as the joint estimate does not reach step {}", k);
+      return filter->FinalTrajectory();
+    }
     for (const auto& f : joint.frames) {
       const Eigen::Vector3d sd = f.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
       spdlog::info("joint estimate: T({} <- {}) = ({:.3f}, {:.3f}, {:.4f} rad), sd ({:.3f} m, {:.3f} m, {:.4f} rad)",

@@ -133,11 +133,12 @@ void BatchSmoother::AddLandmarkReading(int r, int t, const common::LandmarkDetec
     chain.states.push_back({point.x(), point.y(), 0.0});
     ExtendChain(&chain, Horizon());
   } else {
-    const int seen_at = chain.first_step;  // with one sighting, its step
+    // Until the heading is started, every sighting was at the first one's step (two robots may
+    // read a landmark at the same step).
+    const int seen_at = chain.first_step;
     PrependChain(&chain, t);
-    if (chain.sightings == 1 && !chain.kinematics.is_static && t != seen_at) StartHeading(&chain, seen_at, t, point);
+    if (!chain.heading_started && !chain.kinematics.is_static && t != seen_at) StartHeading(&chain, seen_at, t, point);
   }
-  ++chain.sightings;
 }
 
 // The two sightings a (earlier) and b (later), n = b - a steps apart: the heading at a from the
@@ -154,6 +155,51 @@ void BatchSmoother::StartHeading(Chain* chain, int seen_at, int t, const Eigen::
   for (auto& state : chain->states) {
     state = l;
     l = StepLandmark(l, chain->kinematics);
+  }
+  chain->heading_started = true;
+}
+
+void BatchSmoother::StartFrom(const BatchSmoother& previous, const std::map<int, int>& same_landmark) {
+  for (Robot& robot : robots_) {
+    const auto old = std::find_if(previous.robots_.begin(), previous.robots_.end(),
+                                  [&](const Robot& o) { return o.id == robot.id; });
+    if (old == previous.robots_.end()) continue;
+    const std::size_t both = std::min(robot.path.size(), old->path.size());
+    std::copy(old->path.begin(), old->path.begin() + static_cast<std::ptrdiff_t>(both), robot.path.begin());
+    robot.correction = old->correction;
+    for (std::size_t t = both; t < robot.path.size(); ++t) {
+      robot.path[t] = common::Compose(robot.path[t - 1], Increment(robot, static_cast<int>(t), robot.correction));
+    }
+  }
+  for (const auto& [label, old_label] : same_landmark) {
+    const auto now = chains_.find(label);
+    const auto old = previous.chains_.find(old_label);
+    if (now == chains_.end() || old == previous.chains_.end()) continue;
+    Chain& chain = now->second;
+    const Chain& before = old->second;
+    if (chain.kinematics.is_static != before.kinematics.is_static ||
+        chain.kinematics.v_mps != before.kinematics.v_mps || chain.kinematics.w_radps != before.kinematics.w_radps) {
+      continue;
+    }
+    if (chain.kinematics.is_static) {
+      chain.states = before.states;
+      continue;
+    }
+    // The states of the steps both hold, then on (and back) from them by the kinematics.
+    const int first = std::max(chain.first_step, before.first_step);
+    const int last = std::min(chain.first_step + static_cast<int>(chain.states.size()),
+                              before.first_step + static_cast<int>(before.states.size())) -
+                     1;
+    if (first > last) continue;
+    for (int t = first; t <= last; ++t) chain.states[StateIndex(chain, t)] = before.states[StateIndex(before, t)];
+    const Pose2 back = common::Inverse(StepLandmark(Pose2{}, chain.kinematics));
+    for (int t = first - 1; t >= chain.first_step; --t) {
+      chain.states[StateIndex(chain, t)] = common::Compose(chain.states[StateIndex(chain, t + 1)], back);
+    }
+    for (int t = last + 1; t < chain.first_step + static_cast<int>(chain.states.size()); ++t) {
+      chain.states[StateIndex(chain, t)] = StepLandmark(chain.states[StateIndex(chain, t - 1)], chain.kinematics);
+    }
+    chain.heading_started = chain.heading_started || before.heading_started;
   }
 }
 

@@ -59,7 +59,7 @@ namespace mrslam::robot_agent::smoother {
 // q at step t only once q's pose x^q_t is held (t <= S_q; until then it waits). A unicycle step
 // is a composition with a fixed increment, l_t = l_{t-1} * d with d = f(origin; v, w), so a chain
 // read before its first state is started backwards by l_{t-1} = l_t * d^-1, and forward to b by
-// l_t = l_{t-1} * d; its heading is started from the chord between its first two sightings,
+// l_t = l_{t-1} * d; its heading is started from the chord between its first two sightings at two steps,
 // whichever comes first in time. With every S_r equal this is the problem above, built in the
 // same order with the same arithmetic (Add(steps), or Add(r, steps[r]) for every r in the set's
 // order). A detection of a robot counts only if that robot is in the set when it is added.
@@ -107,6 +107,12 @@ class BatchSmoother {
   int Steps(int r) const { return static_cast<int>(robots_.at(r).path.size()) - 1; }
   // The MAP estimate of everything added so far (warm-started from the current one).
   void Solve();
+  // Starts from `previous`, a problem of some of the same robots and landmarks (after Add, before
+  // Solve): each robot of the same id at its poses of the steps both hold and its correction, the
+  // poses after them by its odometry; each landmark at its label's there (same_landmark: label ->
+  // previous's label) at the states of the steps both hold, the others by its kinematics from
+  // them, where both chains have the same kinematics.
+  void StartFrom(const BatchSmoother& previous, const std::map<int, int>& same_landmark);
   // Estimates each robot's odometry factors and turn-rate bias too (call before Add).
   void EstimateOdometryCalibration() { estimate_calibration_ = true; }
   // Ends each solve once an iteration lowers the cost by less than tolerance x (1 + cost)
@@ -138,7 +144,7 @@ class BatchSmoother {
     int first_step = 0;
     Kinematics kinematics;
     std::vector<common::Pose2> states;
-    int sightings = 0;
+    bool heading_started = false;  // from the chord between sightings at two steps
   };
   struct Robot {
     std::string id;
