@@ -133,7 +133,7 @@ void JointChains::Build(const std::map<std::string, FactorLog>& logs, const std:
   added_.assign(problem_.robots.size(), 0);
 }
 
-void JointChains::AddNew(const std::map<std::string, FactorLog>& logs) {
+void JointChains::AddNew(const std::map<std::string, FactorLog>& logs, bool cold) {
   std::vector<const FactorLog*> held;
   std::uint32_t horizon = 0;
   for (const auto& id : problem_.robots) {
@@ -141,11 +141,18 @@ void JointChains::AddNew(const std::map<std::string, FactorLog>& logs) {
     horizon = std::max(horizon, held.back()->Held());
   }
   const std::uint32_t from = *std::min_element(added_.begin(), added_.end()) + 1;
+  // Cold (nothing to start from but the odometry), solved as it grows so that each solve starts
+  // near its answer: after 5 steps, then whenever the steps have grown by a quarter.
+  std::uint32_t next_solve = 5;
   for (std::uint32_t t = from; t <= horizon; ++t) {
     for (std::size_t r = 0; r < held.size(); ++r) {
       if (added_[r] + 1 != t || t > held[r]->Held()) continue;
       smoother_->Add(static_cast<int>(r), Relabelled(held[r]->steps[t - 1], problem_.labels.at(problem_.robots[r])));
       added_[r] = t;
+    }
+    if (cold && t == next_solve && t < horizon) {
+      smoother_->Solve();
+      next_solve = std::max(next_solve + 5, t * 5 / 4);
     }
   }
 }
@@ -168,10 +175,10 @@ std::optional<JointChains::OwnPose> JointChains::Update(std::uint32_t k, const f
     const Problem before = std::move(problem_);
     problem_ = std::move(p);
     Build(logs, frames);
-    AddNew(logs);
+    AddNew(logs, !previous);
     if (previous) smoother_->StartFrom(*previous, SameLandmarks(before, problem_));
   } else {
-    AddNew(logs);
+    AddNew(logs, false);
   }
   smoother_->Solve();
   const common::Pose2& pose = smoother_->Pose(0);

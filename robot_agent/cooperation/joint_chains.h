@@ -59,7 +59,8 @@ common::SensorStep Relabelled(const common::SensorStep& step, const std::map<int
 // the peer's; readings of tracks of unknown kinematics and of robots outside the problem left
 // out. While the problem's robots, labels and kinematics stay the same, each solve adds the steps
 // new since the last one and starts from its solution; when they change it is built again and
-// started from the last solution where they share robots and tracks (BatchSmoother::StartFrom).
+// started from the last solution where they share robots and tracks (BatchSmoother::StartFrom);
+// built with nothing to start from (the first time, after a restore), it is solved as it grows.
 // Within cooperation.max_history_steps own steps only (the cost grows with the steps held).
 // Pure; not thread-safe.
 class JointChains {
@@ -93,8 +94,8 @@ class JointChains {
   // The labels of `now` that name the same track as a label of `before` (the own robot's first).
   static std::map<int, int> SameLandmarks(const Problem& before, const Problem& now);
   void Build(const std::map<std::string, FactorLog>& logs, const std::vector<FrameTransform>& frames);
-  // Adds the steps held beyond those added, in time order.
-  void AddNew(const std::map<std::string, FactorLog>& logs);
+  // Adds the steps held beyond those added, in time order; `cold`: solving as they grow.
+  void AddNew(const std::map<std::string, FactorLog>& logs, bool cold);
 
   // Keeps the candidate each own track follows while the filter sees it move.
   void Remember(const filters::FilterEstimate& own);

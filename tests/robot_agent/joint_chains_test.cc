@@ -155,6 +155,25 @@ TEST(JointChains, LearnsACorrespondenceNoSnapshotMade) {
   EXPECT_LT((own->pose.Translation() - oracle.Pose().Translation()).norm(), 0.01);
 }
 
+TEST(JointChains, BuiltColdLateIsTheSameEstimate) {
+  // A tracker that starts at step 60 with everything held (as after a restore, or a peer whose
+  // data come late) solves as the problem grows and reaches the estimate of one that followed
+  // every step.
+  const int steps = 60;
+  const PaperRun run = RecordPaper(7, steps);
+  const PeerTrackLinks links = Links(run, {{1, 1}, {2, 2}});
+  JointChains followed(run.r1), late(run.r1);
+  std::optional<JointChains::OwnPose> a;
+  for (int k = 1; k <= steps; ++k) {
+    a = followed.Update(static_cast<std::uint32_t>(k), OwnMap(run), HeldAt(run, k), links, TrueFrame(run));
+  }
+  const auto b = late.Update(steps, OwnMap(run), HeldAt(run, steps), links, TrueFrame(run));
+  ASSERT_TRUE(a.has_value());
+  ASSERT_TRUE(b.has_value());
+  EXPECT_LT((a->pose.Translation() - b->pose.Translation()).norm(), 0.01);
+  EXPECT_LT(std::abs(common::WrapAngle(a->pose.heading - b->pose.heading)), 0.005);
+}
+
 TEST(JointTracker, AmongMoversAWrongCorrespondenceMovesTheEstimateNoFurtherThanItsUncertainty) {
   // r1's "filter" reports the true pose with sd 0.1 m / 0.05 rad. With r2's tracks matched the
   // right way the tracker moves the estimate onto the joint one; with them swapped (each on the
