@@ -88,6 +88,7 @@ const std::vector<std::string>& AggregatedMetrics() {
                                                    "moving_completeness",
                                                    "union_completeness",
                                                    "reachable_union_completeness",
+                                                   "static_reachable_union_completeness",
                                                    "common_landmarks_within_3sd",
                                                    "mean_nees",
                                                    "final_trajectory_rmse_m",

@@ -182,6 +182,8 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     EXPECT_LE(r["union_completeness"].get<double>(), 1.0) << id;
     ExpectFiniteAtLeast(r, "reachable_union_completeness", 0.0, id);
     EXPECT_LE(r["reachable_union_completeness"].get<double>(), 1.0) << id;
+    ExpectFiniteAtLeast(r, "static_reachable_union_completeness", 0.0, id);
+    EXPECT_LE(r["static_reachable_union_completeness"].get<double>(), 1.0) << id;
     ExpectFiniteAtLeast(r, "common_landmarks_within_3sd", 0.0, id);
     EXPECT_LE(r["common_landmarks_within_3sd"].get<double>(), 1.0) << id;
     ExpectFiniteAtLeast(r, "step_cpu_ms_median", 1e-6, id);  // the agents measure their steps

@@ -45,6 +45,7 @@ class RunEvaluatorTest : public ::testing::Test {
       truth.stamp.step = step;
       truth.robots = {{"r1", {0.0, 0.0, 0.0}, false}, {"r2", {10.0, 0.0, 0.0}, false}};
       truth.landmarks = {{"1", {1.0, 0.0, 0.0}, false}, {"2", {11.0, 0.0, 0.0}, false}};
+      if (with_mover_) truth.landmarks.push_back({"3", {12.0, 0.0, 0.0}, true});  // within r2's reach
       truth.frames = {{"r1", {0.0, 0.0, 0.0}}, {"r2", {10.0, 0.0, 0.0}}};
       evaluator.AddTruth(truth);
       RobotEstimate r1, r2;
@@ -74,6 +75,7 @@ class RunEvaluatorTest : public ::testing::Test {
 
   common::ScenarioOptions scenario_;
   std::string out_dir_;
+  bool with_mover_ = false;
 };
 
 TEST_F(RunEvaluatorTest, UnionCompletenessCountsTheLandmarksOfTheFramesKnown) {
@@ -98,6 +100,14 @@ TEST_F(RunEvaluatorTest, ReachableUnionCompletenessCountsOnlyWhatReachedTheAgent
   // Data of a robot whose frame it does not know adds nothing.
   const nlohmann::json data_only = Score({}, {{"r2", 1U}});
   EXPECT_DOUBLE_EQ(data_only["robots"]["r1"]["reachable_union_completeness"].get<double>(), 1.0);
+}
+
+TEST_F(RunEvaluatorTest, StaticReachableUnionCompletenessLeavesTheMoversOut) {
+  // r2 also saw a moving landmark; r2's data reached r1, whose map holds landmark 1 only.
+  with_mover_ = true;
+  const nlohmann::json s = Score({"r2"}, {{"r2", 1U}});
+  EXPECT_DOUBLE_EQ(s["robots"]["r1"]["reachable_union_completeness"].get<double>(), 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(s["robots"]["r1"]["static_reachable_union_completeness"].get<double>(), 0.5);
 }
 
 TEST_F(RunEvaluatorTest, RejectedSamplesAreTheAgentsCountAtTheEnd) {

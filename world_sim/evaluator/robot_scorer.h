@@ -75,6 +75,8 @@ class RobotScorer {
   // The true landmarks that stand in the map at the last step: by id, the map landmark standing
   // for each.
   const std::map<int, MapPoint>& InMap() const { return in_map_; }
+  // The true landmarks seen moving within the robot's reach so far.
+  const std::set<int>& SeenMoving() const { return seen_moving_; }
   // The share of the true landmarks `seen` that stand in the map at the last step (1 for none).
   double Completeness(const std::set<int>& seen) const;
 

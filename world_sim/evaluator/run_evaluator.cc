@@ -328,7 +328,10 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   // Of the landmarks within the reach of this robot or of the robots whose frames it knows, the
   // share in its map at the end.
   r["union_completeness"] = robot.scorer->Completeness(UnionReach(robot, false));
-  r["reachable_union_completeness"] = robot.scorer->Completeness(UnionReach(robot, true));
+  std::set<int> reachable = UnionReach(robot, true);
+  r["reachable_union_completeness"] = robot.scorer->Completeness(reachable);
+  for (const int mover : Movers()) reachable.erase(mover);
+  r["static_reachable_union_completeness"] = robot.scorer->Completeness(reachable);
   const MapAgreement agreement = AgreementWithPeers(robot);
   r["common_landmarks"] = agreement.common;
   r["common_landmarks_within_3sd"] =
@@ -387,6 +390,16 @@ std::set<int> RunEvaluator::UnionReach(const RobotRun& robot, bool reachable_onl
     }
   }
   return reach;
+}
+
+std::set<int> RunEvaluator::Movers() const {
+  std::set<int> movers;
+  for (const auto& [id, robot] : robots_) {
+    if (!robot.scorer) continue;
+    const std::set<int>& seen = robot.scorer->SeenMoving();
+    movers.insert(seen.begin(), seen.end());
+  }
+  return movers;
 }
 
 void RunEvaluator::WriteStep(const std::string& id, const RobotEstimate& est, const StepScore& score, RobotRun* robot) {

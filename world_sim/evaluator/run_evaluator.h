@@ -112,6 +112,8 @@ class RunEvaluator {
   // knows at the end: over that robot's whole run, or (reachable_only) over the steps of it whose
   // data reached the agent (RobotEstimate::data_held).
   std::set<int> UnionReach(const RobotRun& robot, bool reachable_only) const;
+  // The landmarks any robot saw moving within its reach.
+  std::set<int> Movers() const;
   // AgreementOfMaps of the robot's map at the end with each peer's whose frame it knows, summed.
   MapAgreement AgreementWithPeers(const RobotRun& robot) const;
   // The robot's summary entry; the union completeness over the robots whose frame it knows.
