@@ -569,7 +569,10 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, filters::SlamFilter* filte
   if (filter != nullptr) {
     const filters::FilterEstimate own = filter->Estimate();
     const CommonLandmarks common = MatchSnapshot(m, own, *sender.transform);
-    LinkTracks(common, &sender);
+    if (options_.cooperation.share_factors &&
+        options_.filter.landmark_kinematics == LandmarkKinematics::kKnownCandidates) {
+      LinkTracks(common, &sender);  // for the joint estimate among movers
+    }
     if (const auto joint = JointTransform(m, own, common, *sender.transform)) {
       HoldTransform(&sender, *joint, m.header.step);
       joint_estimates_.push_back({m.header.sender, m.header.step, joint->t, joint->Covariance()});

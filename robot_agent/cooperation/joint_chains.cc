@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 
 #include <Eigen/Cholesky>
 
@@ -49,9 +50,7 @@ JointChains::JointChains(const AgentOptions& options) : options_(options) {}
 void JointChains::Remember(const filters::FilterEstimate& own) {
   for (const auto& l : own.landmarks) {
     const auto k = TrackKinematics(options_.filter, l);
-    if (k && *k != kStaticKinematics && l.track_id <= static_cast<std::uint32_t>(std::numeric_limits<int>::max())) {
-      seen_moving_[static_cast<int>(l.track_id)] = *k;
-    }
+    if (const int label = OwnLabel(l); k && *k != kStaticKinematics && label != 0) seen_moving_[label] = *k;
   }
 }
 
@@ -61,24 +60,31 @@ JointChains::Problem JointChains::Pose(const filters::FilterEstimate& own, const
   p.robots.push_back(options_.robot_id);
   std::map<int, int>& own_labels = p.labels[options_.robot_id];
   for (const auto& l : own.landmarks) {
-    if (l.track_id == 0 || l.track_id > static_cast<std::uint32_t>(std::numeric_limits<int>::max())) continue;
-    const int label = static_cast<int>(l.track_id);
+    const int label = OwnLabel(l);
+    if (label == 0) continue;
     if (const auto k = KeptKinematics(seen_moving_, label, TrackKinematics(options_.filter, l))) {
       own_labels[label] = label;
       p.kinematics[label] = *k;
     }
   }
+  const bool identities = options_.sensors.lidar.report_identity;
   int next = p.kinematics.empty() ? 1 : p.kinematics.rbegin()->first + 1;
-  for (const auto& [id, tracks] : links) {
+  for (const auto& [id, log] : logs) {
     const std::string& peer = id;
-    const auto log = logs.find(peer);
     const bool frame_known =
         std::any_of(frames.begin(), frames.end(), [&](const FrameTransform& f) { return f.peer == peer; });
-    if (peer == options_.robot_id || log == logs.end() || log->second.Held() == 0 || !frame_known) continue;
+    const auto tracks = links.find(peer);
+    if (peer == options_.robot_id || log.Held() == 0 || !frame_known) continue;
+    if (identities) {  // every robot's labels name the same landmarks
+      p.robots.push_back(peer);
+      p.labels[peer] = own_labels;
+      continue;
+    }
+    if (tracks == links.end()) continue;
     std::map<int, int> labels, kinematics;
     bool shared = false;  // without a landmark both read, little but the odometry places the peer
     int label = next;
-    for (const auto& [track, link] : tracks) {
+    for (const auto& [track, link] : tracks->second) {
       std::uint32_t own_track = link.own_track;
       if (const auto it = learned_.find({peer, track});
           own_labels.count(static_cast<int>(own_track)) == 0 && it != learned_.end()) {
@@ -100,6 +106,12 @@ JointChains::Problem JointChains::Pose(const filters::FilterEstimate& own, const
     p.kinematics.insert(kinematics.begin(), kinematics.end());
   }
   return p;
+}
+
+int JointChains::OwnLabel(const filters::MapLandmark& l) const {
+  if (options_.sensors.lidar.report_identity) return l.landmark_id >= 0 ? l.landmark_id + 1 : 0;
+  // Far below the largest int, so that the labels given to peers' tracks above them fit.
+  return l.track_id <= kMaxOwnLabel ? static_cast<int>(l.track_id) : 0;
 }
 
 std::map<int, int> JointChains::SameLandmarks(const Problem& before, const Problem& now) {
@@ -192,15 +204,20 @@ void JointChains::Learn(const filters::FilterEstimate& own) {
   const std::map<int, int>& own_labels = problem_.labels.at(options_.robot_id);
   const double gate = common::ChiSquare2Quantile(options_.cooperation.match_gate_probability);
   for (std::size_t r = 1; r < problem_.robots.size(); ++r) {
-    for (const auto& [track, label] : problem_.labels.at(problem_.robots[r])) {
+    const std::map<int, int>& labels = problem_.labels.at(problem_.robots[r]);
+    std::set<int> used;  // the own labels this robot's tracks already stand on: one track each
+    for (const auto& [track, label] : labels) {
+      if (own_labels.count(label) != 0) used.insert(label);
+    }
+    for (const auto& [track, label] : labels) {
       if (own_labels.count(label) != 0 || at.count(label) == 0) continue;
       // The own tracks of the same kinematics within the gate of it (the own landmark's
       // covariance taken for both): the nearest, if it is the only one.
       int best = 0, within = 0;
       double best_d2 = gate;
       for (const auto& l : own.landmarks) {
-        const auto mine = own_labels.find(static_cast<int>(l.track_id));
-        if (mine == own_labels.end() || at.count(mine->second) == 0 ||
+        const auto mine = own_labels.find(OwnLabel(l));
+        if (mine == own_labels.end() || used.count(mine->second) != 0 || at.count(mine->second) == 0 ||
             problem_.kinematics.at(mine->second) != problem_.kinematics.at(label)) {
           continue;
         }
@@ -214,7 +231,10 @@ void JointChains::Learn(const filters::FilterEstimate& own) {
           best = mine->second;
         }
       }
-      if (within == 1) learned_[{problem_.robots[r], track}] = static_cast<std::uint32_t>(best);
+      if (within == 1) {
+        learned_[{problem_.robots[r], track}] = static_cast<std::uint32_t>(best);
+        used.insert(best);
+      }
     }
   }
 }

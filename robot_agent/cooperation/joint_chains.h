@@ -55,14 +55,13 @@ common::SensorStep Relabelled(const common::SensorStep& step, const std::map<int
 // peer whose log is held, whose frame is known and of whose tracks at least one is matched to an
 // own one (its first pose an unknown, started from the held transform); the readings labelled
 // by the own tracks, a peer's by the own track its track was matched to or else by a label of
-// its own; each label's kinematics the own filter's (KeptKinematics), a peer's unmatched track's
-// the peer's; readings of tracks of unknown kinematics and of robots outside the problem left
-// out. While the problem's robots, labels and kinematics stay the same, each solve adds the steps
-// new since the last one and starts from its solution; when they change it is built again and
-// started from the last solution where they share robots and tracks (BatchSmoother::StartFrom);
-// built with nothing to start from (the first time, after a restore), it is solved as it grows.
-// Within cooperation.max_history_steps own steps only (the cost grows with the steps held).
-// Pure; not thread-safe.
+// its own (where the sensor reports identities, every robot's by identity, as shared); each label's kinematics the own
+// filter's (KeptKinematics), a peer's unmatched track's the peer's; readings of tracks of unknown kinematics and of
+// robots outside the problem left out. While the problem's robots, labels and kinematics stay the same, each solve adds
+// the steps new since the last one and starts from its solution; when they change it is built again and started from
+// the last solution where they share robots and tracks (BatchSmoother::StartFrom); built with nothing to start from
+// (the first time, after a restore), it is solved as it grows. Within cooperation.max_history_steps own steps only (the
+// cost grows with the steps held). Pure; not thread-safe.
 class JointChains {
  public:
   explicit JointChains(const AgentOptions& options);
@@ -79,6 +78,10 @@ class JointChains {
                                 const std::vector<FrameTransform>& frames);
   // The last solution: the own path (every step) and the peers' frames (empty before a solve).
   JointEstimate Summary() const;
+
+  // What it learnt (the candidates tracks were seen to follow, the correspondences); the problem
+  // is not written (after a restore it is built again, solved as it grows).
+  void Io(common::Archive& ar) { ar(seen_moving_, learned_); }
 
  private:
   struct Problem {
@@ -97,15 +100,19 @@ class JointChains {
   // Adds the steps held beyond those added, in time order; `cold`: solving as they grow.
   void AddNew(const std::map<std::string, FactorLog>& logs, bool cold);
 
+  // The label of an own landmark: its identity + 1 where the sensor reports identities (the
+  // shared logs are labelled so), else its track; 0: none.
+  int OwnLabel(const filters::MapLandmark& l) const;
+  static constexpr std::uint32_t kMaxOwnLabel = 1U << 30;
   // Keeps the candidate each own track follows while the filter sees it move.
   void Remember(const filters::FilterEstimate& own);
   // Links a peer's track that no snapshot matched to the own track of the same kinematics whose
   // path the solution puts within cooperation.match_gate_probability of its path, when only one
-  // is (taken from the next step on).
+  // is and no other track of that peer stands on it (taken from the next step on).
   void Learn(const filters::FilterEstimate& own);
 
   AgentOptions options_;
-  std::map<int, int> seen_moving_;  // own track -> the candidate it was last seen to follow
+  std::map<int, int> seen_moving_;  // own label -> the candidate it was last seen to follow
   std::map<std::pair<std::string, int>, std::uint32_t> learned_;  // (peer, its track) -> own track
   Problem problem_;
   std::unique_ptr<smoother::BatchSmoother> smoother_;

@@ -64,6 +64,8 @@ void JointTracker::AfterStep(std::uint32_t k, const filters::FilterEstimate& est
       pose_covariance_.reset();
       if (within && common::IsSymmetricPositiveDefinite<3>(joint->covariance)) pose_covariance_ = joint->covariance;
       ++solves_;
+    } else {
+      pose_covariance_.reset();  // the last correction stands, with the filter's uncertainty
     }
     return;
   }

@@ -29,10 +29,12 @@ namespace mrslam::robot_agent::cooperation {
 //   estimate with every landmark's path (JointChains), as long as a peer's data are held.
 // The own estimate is then the filter's moved by the rigid motion C = J_s * F_s^-1 that takes
 // the filter's pose F_s of the step s of the last solve to the joint estimate's J_s: pose
-// C * F_k, landmarks C * p, covariances rotated by C's heading (the filter's uncertainty is
-// kept; the joint estimate's own is smaller, so this errs on the large side). At the end, Final
-// gives the joint estimate over everything held (the static graph solved once more from the
-// last one, to convergence). Pure; not thread-safe.
+// C * F_k, landmarks C * p, covariances rotated by C's heading. Among static landmarks the
+// filter's uncertainty is kept (the joint estimate's own is smaller, so this errs on the large
+// side); among movers the pose covariance of a step solved is the joint estimate's marginal, and
+// a joint pose beyond the filter's uncertainty is not taken (the filter's estimate stands). At
+// the end, Final gives the joint estimate over everything held (the static graph solved once
+// more from the last one, to convergence). Pure; not thread-safe.
 class JointTracker {
  public:
   explicit JointTracker(const AgentOptions& options);
@@ -54,9 +56,12 @@ class JointTracker {
   const common::Pose2& correction() const { return correction_; }
   int solves() const { return solves_; }
 
-  // The correction and the schedule; the graph is not written (after a restore the next solve
-  // starts cold).
-  void Io(common::Archive& ar) { ar(correction_, pose_covariance_, next_due_, received_at_solve_, solves_); }
+  // The correction and the schedule, and what the joint estimate among movers learnt; the graph
+  // is not written (after a restore the next solve starts cold).
+  void Io(common::Archive& ar) {
+    ar(correction_, pose_covariance_, next_due_, received_at_solve_, solves_);
+    chains_.Io(ar);
+  }
 
  private:
   JointEstimate Solve(const std::map<std::string, FactorLog>& logs, bool to_convergence);

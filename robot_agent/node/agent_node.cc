@@ -378,11 +378,14 @@ struct AgentNode::Impl {
   void TrackJoint(std::uint32_t k, const filters::FilterEstimate& estimate) {
     const int before = joint_tracker.solves();
     const auto& x = cooperation.exchange();
-    joint_tracker.AfterStep(k, estimate, x.logs(), x.steps_received(), cooperation.track_links(),
-                            cooperation.known_transforms());
-    if (joint_tracker.solves() == before ||
-        (before > 0 && agent.filter.landmark_kinematics != LandmarkKinematics::kStatic))
-      return;
+    const bool among_movers = agent.filter.landmark_kinematics != LandmarkKinematics::kStatic;
+    if (among_movers) {
+      joint_tracker.AfterStep(k, estimate, x.logs(), x.steps_received(), cooperation.track_links(),
+                              cooperation.known_transforms());
+    } else {
+      joint_tracker.AfterStep(k, estimate, x.logs(), x.steps_received());
+    }
+    if (joint_tracker.solves() == before || (before > 0 && among_movers)) return;
     const common::Pose2& c = joint_tracker.correction();
     spdlog::info("joint estimate at step {}: the own estimate moved by ({:.3f}, {:.3f}, {:.4f} rad)", k, c.x, c.y,
                  c.heading);

@@ -120,24 +120,32 @@ void BatchSmoother::PrependChain(Chain* chain, int t) const {
 
 void BatchSmoother::AddLandmarkReading(int r, int t, const common::LandmarkDetection& d) {
   if (d.landmark_id < 0) throw std::invalid_argument("the reference needs detections with identities");
-  const auto listed = kinematics_.find(d.landmark_id);
-  const bool known = listed != kinematics_.end() || unlisted_ == Unlisted::kStatic;
+  const bool known = kinematics_.count(d.landmark_id) != 0 || unlisted_ == Unlisted::kStatic;
   if (!known || !std::isfinite(d.range_m) || !std::isfinite(d.bearing_rad)) return;
   readings_.push_back({t, r, d.landmark_id, -1, d.range_m, d.bearing_rad});
-  const Eigen::Vector2d point = common::PointFromRangeBearing(robots_[r].path[t], {d.range_m, d.bearing_rad});
-  auto [it, created] = chains_.try_emplace(d.landmark_id);
+  PlaceFrom(readings_.back());
+}
+
+void BatchSmoother::PlaceFrom(const Reading& z) {
+  const Eigen::Vector2d point =
+      common::PointFromRangeBearing(robots_[z.robot].path[z.step], {z.range_m, z.bearing_rad});
+  auto [it, created] = chains_.try_emplace(z.landmark_id);
   Chain& chain = it->second;
   if (created) {
-    chain.first_step = t;
-    if (listed != kinematics_.end()) chain.kinematics = listed->second;
+    chain.first_step = z.step;
+    if (const auto listed = kinematics_.find(z.landmark_id); listed != kinematics_.end()) {
+      chain.kinematics = listed->second;
+    }
     chain.states.push_back({point.x(), point.y(), 0.0});
     ExtendChain(&chain, Horizon());
   } else {
     // Until the heading is started, every sighting was at the first one's step (two robots may
     // read a landmark at the same step).
     const int seen_at = chain.first_step;
-    PrependChain(&chain, t);
-    if (!chain.heading_started && !chain.kinematics.is_static && t != seen_at) StartHeading(&chain, seen_at, t, point);
+    PrependChain(&chain, z.step);
+    if (!chain.heading_started && !chain.kinematics.is_static && z.step != seen_at) {
+      StartHeading(&chain, seen_at, z.step, point);
+    }
   }
 }
 
@@ -171,16 +179,23 @@ void BatchSmoother::StartFrom(const BatchSmoother& previous, const std::map<int,
       robot.path[t] = common::Compose(robot.path[t - 1], Increment(robot, static_cast<int>(t), robot.correction));
     }
   }
+  // Every landmark placed again from its readings seen from those poses, then those of the
+  // previous problem taken from it.
+  chains_.clear();
+  for (const Reading& z : readings_) {
+    if (z.landmark_id >= 0) PlaceFrom(z);
+  }
   for (const auto& [label, old_label] : same_landmark) {
     const auto now = chains_.find(label);
     const auto old = previous.chains_.find(old_label);
     if (now == chains_.end() || old == previous.chains_.end()) continue;
     Chain& chain = now->second;
     const Chain& before = old->second;
-    if (chain.kinematics.is_static != before.kinematics.is_static ||
-        chain.kinematics.v_mps != before.kinematics.v_mps || chain.kinematics.w_radps != before.kinematics.w_radps) {
-      continue;
-    }
+    const bool same_kinematics = chain.kinematics.is_static == before.kinematics.is_static &&
+                                 chain.kinematics.v_mps == before.kinematics.v_mps &&
+                                 chain.kinematics.w_radps == before.kinematics.w_radps;
+    // A heading the previous problem never saw does not replace one started here.
+    if (!same_kinematics || (chain.heading_started && !before.heading_started)) continue;
     if (chain.kinematics.is_static) {
       chain.states = before.states;
       continue;
@@ -199,7 +214,7 @@ void BatchSmoother::StartFrom(const BatchSmoother& previous, const std::map<int,
     for (int t = last + 1; t < chain.first_step + static_cast<int>(chain.states.size()); ++t) {
       chain.states[StateIndex(chain, t)] = StepLandmark(chain.states[StateIndex(chain, t - 1)], chain.kinematics);
     }
-    chain.heading_started = chain.heading_started || before.heading_started;
+    chain.heading_started = before.heading_started;
   }
 }
 

@@ -109,9 +109,10 @@ class BatchSmoother {
   void Solve();
   // Starts from `previous`, a problem of some of the same robots and landmarks (after Add, before
   // Solve): each robot of the same id at its poses of the steps both hold and its correction, the
-  // poses after them by its odometry; each landmark at its label's there (same_landmark: label ->
-  // previous's label) at the states of the steps both hold, the others by its kinematics from
-  // them, where both chains have the same kinematics.
+  // poses after them by its odometry; every landmark placed again from its readings seen from
+  // those poses, then each at its label's there (same_landmark: label -> previous's label) at the
+  // states of the steps both hold, the others by its kinematics from them, where both chains have
+  // the same kinematics (and the previous one a heading started, if this one has).
   void StartFrom(const BatchSmoother& previous, const std::map<int, int>& same_landmark);
   // Estimates each robot's odometry factors and turn-rate bias too (call before Add).
   void EstimateOdometryCalibration() { estimate_calibration_ = true; }
@@ -171,6 +172,8 @@ class BatchSmoother {
   // Robot r's readings of its newest step.
   void AddReadings(int r, const common::SensorStep& step);
   void AddLandmarkReading(int r, int t, const common::LandmarkDetection& d);
+  // Starts, or extends back, the chain of the landmark z reads (from the reader's pose there).
+  void PlaceFrom(const Reading& z);
   // The newest step any robot holds, and every moving chain's states up to it.
   int Horizon() const;
   void ExtendChains();

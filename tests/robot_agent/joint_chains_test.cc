@@ -41,6 +41,9 @@ PaperRun RecordPaper(int seed, int steps) {
   run.r1 = common::AgentOptionsFor(run.scenario, "r1");
   run.r1.cooperation.share_factors = true;
   run.r1.filter.type = "smoother";
+  // The agent labels its shared readings by its tracks (here: the identities the simulation
+  // reports, so that the right correspondence is known).
+  run.r1.sensors.lidar.report_identity = false;
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(run.scenario);
   const auto frames = source->Truth().frames;
   run.t_r1_r2 = common::Between(frames[0].second, frames[1].second);
@@ -136,6 +139,35 @@ TEST(JointChains, IsTheJointEstimateOfBothRobotsData) {
   const common::Pose2& t = summary.frames[0].t_self_robot;
   const Eigen::Vector3d d(t.x - run.t_r1_r2.x, t.y - run.t_r1_r2.y, common::WrapAngle(t.heading - run.t_r1_r2.heading));
   EXPECT_LT(d.dot(summary.frames[0].covariance.ldlt().solve(d)), ChiSquare3Quantile(0.999)) << d.transpose();
+}
+
+TEST(JointChains, WithIdentitiesEveryRobotsLabelsNameTheSameLandmarks) {
+  // The sensor reports identities: every robot's shared readings are labelled identity + 1 and
+  // no snapshot is needed to join them; the own tracks are numbered otherwise.
+  const int steps = 40;
+  const PaperRun original = RecordPaper(3, steps);
+  PaperRun run = original;
+  run.r1.sensors.lidar.report_identity = true;
+  for (auto& [id, log] : run.logs) {
+    for (auto& step : log.steps) {
+      for (auto& d : step.lidar.landmarks) d.landmark_id += 1;
+    }
+  }
+  filters::FilterEstimate own = OwnMap(run);
+  for (auto& l : own.landmarks) {
+    l.landmark_id = static_cast<int>(l.track_id);
+    l.track_id += 100;
+  }
+  JointChains chains(run.r1);
+  smoother::BatchSmoother oracle = JointOracle(run);
+  std::optional<JointChains::OwnPose> joint;
+  for (int k = 1; k <= steps; ++k) {
+    oracle.Process({original.logs.at("r1").steps[k - 1], original.logs.at("r2").steps[k - 1]});
+    joint = chains.Update(static_cast<std::uint32_t>(k), own, HeldAt(run, k), {}, TrueFrame(run));
+    ASSERT_TRUE(joint.has_value()) << "step " << k;
+  }
+  EXPECT_LT((joint->pose.Translation() - oracle.Pose().Translation()).norm(), 0.01);
+  EXPECT_EQ(chains.Summary().frames.size(), 1U);
 }
 
 TEST(JointChains, LearnsACorrespondenceNoSnapshotMade) {
