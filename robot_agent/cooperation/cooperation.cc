@@ -447,11 +447,11 @@ void Cooperation::LinkTracks(const CommonLandmarks& common, PeerState* sender) c
     const filters::MapLandmark& l = common.theirs[i];
     if (l.track_id > static_cast<std::uint32_t>(std::numeric_limits<int>::max())) continue;
     const int track = static_cast<int>(l.track_id);
-    std::map<int, int> seen_moving;
+    std::optional<int> seen_moving;
     if (const auto it = sender->tracks.find(track); it != sender->tracks.end() && it->second.kinematics >= 0) {
-      seen_moving[track] = it->second.kinematics;
+      seen_moving = it->second.kinematics;
     }
-    const auto k = KeptKinematics(seen_moving, track, TrackKinematics(options_.filter, l));
+    const auto k = KeptKinematics(seen_moving, TrackKinematics(options_.filter, l));
     if (!k) continue;
     sender->tracks[track] = {common.match[i] < 0 ? 0 : common.mine[common.match[i]].track_id, *k};
   }
@@ -569,10 +569,7 @@ void Cooperation::ApplySnapshot(const MapSnapshot& m, filters::SlamFilter* filte
   if (filter != nullptr) {
     const filters::FilterEstimate own = filter->Estimate();
     const CommonLandmarks common = MatchSnapshot(m, own, *sender.transform);
-    if (options_.cooperation.share_factors &&
-        options_.filter.landmark_kinematics == LandmarkKinematics::kKnownCandidates) {
-      LinkTracks(common, &sender);  // for the joint estimate among movers
-    }
+    if (JointAmongMovers(options_)) LinkTracks(common, &sender);
     if (const auto joint = JointTransform(m, own, common, *sender.transform)) {
       HoldTransform(&sender, *joint, m.header.step);
       joint_estimates_.push_back({m.header.sender, m.header.step, joint->t, joint->Covariance()});

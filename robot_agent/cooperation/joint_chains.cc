@@ -39,10 +39,13 @@ common::SensorStep Relabelled(const common::SensorStep& step, const std::map<int
   return out;
 }
 
-std::optional<int> KeptKinematics(const std::map<int, int>& seen_moving, int track, std::optional<int> now) {
-  const auto before = seen_moving.find(track);
-  if (before != seen_moving.end() && (!now || *now == kStaticKinematics)) return before->second;
-  return now;
+std::optional<int> KeptKinematics(std::optional<int> seen_moving, std::optional<int> now) {
+  return seen_moving && (!now || *now == kStaticKinematics) ? seen_moving : now;
+}
+
+bool JointAmongMovers(const AgentOptions& options) {
+  return options.cooperation.share_factors &&
+         options.filter.landmark_kinematics == LandmarkKinematics::kKnownCandidates;
 }
 
 JointChains::JointChains(const AgentOptions& options) : options_(options) {}
@@ -54,6 +57,11 @@ void JointChains::Remember(const filters::FilterEstimate& own) {
   }
 }
 
+std::optional<int> JointChains::SeenMoving(int label) const {
+  const auto it = seen_moving_.find(label);
+  return it == seen_moving_.end() ? std::nullopt : std::optional<int>(it->second);
+}
+
 JointChains::Problem JointChains::Pose(const filters::FilterEstimate& own, const std::map<std::string, FactorLog>& logs,
                                        const PeerTrackLinks& links, const std::vector<FrameTransform>& frames) const {
   Problem p;
@@ -62,7 +70,7 @@ JointChains::Problem JointChains::Pose(const filters::FilterEstimate& own, const
   for (const auto& l : own.landmarks) {
     const int label = OwnLabel(l);
     if (label == 0) continue;
-    if (const auto k = KeptKinematics(seen_moving_, label, TrackKinematics(options_.filter, l))) {
+    if (const auto k = KeptKinematics(SeenMoving(label), TrackKinematics(options_.filter, l))) {
       own_labels[label] = label;
       p.kinematics[label] = *k;
     }

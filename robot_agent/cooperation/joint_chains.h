@@ -34,9 +34,13 @@ std::optional<int> TrackKinematics(const FilterOptions& filter, const filters::M
 smoother::BatchSmoother::Kinematics KinematicsOf(const FilterOptions& filter, int index);
 
 // A track's kinematics `now` (TrackKinematics), or the candidate it was last seen to follow
-// (seen_moving: track -> candidate) when it is now taken as static or not known: a filter may
-// take a mover seen from far as static for a while.
-std::optional<int> KeptKinematics(const std::map<int, int>& seen_moving, int track, std::optional<int> now);
+// (seen_moving, if any) when it is now taken as static or not known: a filter may take a mover
+// seen from far as static for a while.
+std::optional<int> KeptKinematics(std::optional<int> seen_moving, std::optional<int> now);
+
+// Whether an agent keeps the joint estimate among movers (JointChains): raw measurements shared
+// among landmarks of known kinematics.
+bool JointAmongMovers(const AgentOptions& options);
 
 // A peer's track as the own agent knows it from the peer's map snapshots: the own track it was
 // matched to (0: none) and its kinematics (TrackKinematics of the peer's landmark).
@@ -106,6 +110,8 @@ class JointChains {
   static constexpr std::uint32_t kMaxOwnLabel = 1U << 30;
   // Keeps the candidate each own track follows while the filter sees it move.
   void Remember(const filters::FilterEstimate& own);
+  // The candidate the own label was last seen to follow, if any.
+  std::optional<int> SeenMoving(int label) const;
   // Links a peer's track that no snapshot matched to the own track of the same kinematics whose
   // path the solution puts within cooperation.match_gate_probability of its path, when only one
   // is and no other track of that peer stands on it (taken from the next step on).

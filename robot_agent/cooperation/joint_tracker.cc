@@ -51,7 +51,7 @@ JointEstimate JointTracker::Solve(const std::map<std::string, FactorLog>& logs, 
 void JointTracker::AfterStep(std::uint32_t k, const filters::FilterEstimate& estimate,
                              const std::map<std::string, FactorLog>& logs, std::uint64_t steps_received,
                              const PeerTrackLinks& links, const std::vector<FrameTransform>& frames) {
-  if (AmongMovers()) {
+  if (JointAmongMovers(options_)) {
     if (const auto joint = chains_.Update(k, estimate, logs, links, frames)) {
       // A joint estimate beyond the filter's own uncertainty is not taken (a wrong match or
       // kinematics among the peers' tracks): the filter's stands.
@@ -96,7 +96,7 @@ filters::FilterEstimate JointTracker::Corrected(filters::FilterEstimate estimate
 }
 
 JointEstimate JointTracker::Final(const std::map<std::string, FactorLog>& logs) {
-  return AmongMovers() ? chains_.Summary() : Solve(logs, true);
+  return JointAmongMovers(options_) ? chains_.Summary() : Solve(logs, true);
 }
 
 }  // namespace mrslam::robot_agent::cooperation

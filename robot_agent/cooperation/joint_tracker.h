@@ -65,7 +65,6 @@ class JointTracker {
 
  private:
   JointEstimate Solve(const std::map<std::string, FactorLog>& logs, bool to_convergence);
-  bool AmongMovers() const { return options_.filter.landmark_kinematics == LandmarkKinematics::kKnownCandidates; }
 
   AgentOptions options_;
   JointChains chains_;

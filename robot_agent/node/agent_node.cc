@@ -378,7 +378,7 @@ struct AgentNode::Impl {
   void TrackJoint(std::uint32_t k, const filters::FilterEstimate& estimate) {
     const int before = joint_tracker.solves();
     const auto& x = cooperation.exchange();
-    const bool among_movers = agent.filter.landmark_kinematics != LandmarkKinematics::kStatic;
+    const bool among_movers = cooperation::JointAmongMovers(agent);
     if (among_movers) {
       joint_tracker.AfterStep(k, estimate, x.logs(), x.steps_received(), cooperation.track_links(),
                               cooperation.known_transforms());

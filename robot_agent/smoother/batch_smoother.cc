@@ -188,34 +188,34 @@ void BatchSmoother::StartFrom(const BatchSmoother& previous, const std::map<int,
   for (const auto& [label, old_label] : same_landmark) {
     const auto now = chains_.find(label);
     const auto old = previous.chains_.find(old_label);
-    if (now == chains_.end() || old == previous.chains_.end()) continue;
-    Chain& chain = now->second;
-    const Chain& before = old->second;
-    const bool same_kinematics = chain.kinematics.is_static == before.kinematics.is_static &&
-                                 chain.kinematics.v_mps == before.kinematics.v_mps &&
-                                 chain.kinematics.w_radps == before.kinematics.w_radps;
-    // A heading the previous problem never saw does not replace one started here.
-    if (!same_kinematics || (chain.heading_started && !before.heading_started)) continue;
-    if (chain.kinematics.is_static) {
-      chain.states = before.states;
-      continue;
-    }
-    // The states of the steps both hold, then on (and back) from them by the kinematics.
-    const int first = std::max(chain.first_step, before.first_step);
-    const int last = std::min(chain.first_step + static_cast<int>(chain.states.size()),
-                              before.first_step + static_cast<int>(before.states.size())) -
-                     1;
-    if (first > last) continue;
-    for (int t = first; t <= last; ++t) chain.states[StateIndex(chain, t)] = before.states[StateIndex(before, t)];
-    const Pose2 back = common::Inverse(StepLandmark(Pose2{}, chain.kinematics));
-    for (int t = first - 1; t >= chain.first_step; --t) {
-      chain.states[StateIndex(chain, t)] = common::Compose(chain.states[StateIndex(chain, t + 1)], back);
-    }
-    for (int t = last + 1; t < chain.first_step + static_cast<int>(chain.states.size()); ++t) {
-      chain.states[StateIndex(chain, t)] = StepLandmark(chain.states[StateIndex(chain, t - 1)], chain.kinematics);
-    }
-    chain.heading_started = before.heading_started;
+    if (now != chains_.end() && old != previous.chains_.end()) StartChainFrom(&now->second, old->second);
   }
+}
+
+void BatchSmoother::StartChainFrom(Chain* chain, const Chain& before) const {
+  const bool same_kinematics = chain->kinematics.is_static == before.kinematics.is_static &&
+                               chain->kinematics.v_mps == before.kinematics.v_mps &&
+                               chain->kinematics.w_radps == before.kinematics.w_radps;
+  // A heading the previous problem never saw does not replace one started here.
+  if (!same_kinematics || (chain->heading_started && !before.heading_started)) return;
+  if (chain->kinematics.is_static) {
+    chain->states = before.states;
+    return;
+  }
+  // The states of the steps both hold, then on (and back) from them by the kinematics.
+  const int end = chain->first_step + static_cast<int>(chain->states.size());
+  const int first = std::max(chain->first_step, before.first_step);
+  const int last = std::min(end, before.first_step + static_cast<int>(before.states.size())) - 1;
+  if (first > last) return;
+  for (int t = first; t <= last; ++t) chain->states[StateIndex(*chain, t)] = before.states[StateIndex(before, t)];
+  const Pose2 back = common::Inverse(StepLandmark(Pose2{}, chain->kinematics));
+  for (int t = first - 1; t >= chain->first_step; --t) {
+    chain->states[StateIndex(*chain, t)] = common::Compose(chain->states[StateIndex(*chain, t + 1)], back);
+  }
+  for (int t = last + 1; t < end; ++t) {
+    chain->states[StateIndex(*chain, t)] = StepLandmark(chain->states[StateIndex(*chain, t - 1)], chain->kinematics);
+  }
+  chain->heading_started = before.heading_started;
 }
 
 void BatchSmoother::Solve() {

@@ -174,6 +174,8 @@ class BatchSmoother {
   void AddLandmarkReading(int r, int t, const common::LandmarkDetection& d);
   // Starts, or extends back, the chain of the landmark z reads (from the reader's pose there).
   void PlaceFrom(const Reading& z);
+  // StartFrom for one landmark: its chain at `before`'s states where they share steps.
+  void StartChainFrom(Chain* chain, const Chain& before) const;
   // The newest step any robot holds, and every moving chain's states up to it.
   int Horizon() const;
   void ExtendChains();

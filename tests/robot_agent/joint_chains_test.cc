@@ -104,12 +104,12 @@ smoother::BatchSmoother JointOracle(const PaperRun& run) {
 }
 
 TEST(JointChains, KeepsTheCandidateATrackWasSeenToFollow) {
-  const std::map<int, int> seen{{4, 1}};
-  EXPECT_EQ(KeptKinematics(seen, 4, kStaticKinematics), 1);  // a mover taken as static for a while
-  EXPECT_EQ(KeptKinematics(seen, 4, std::nullopt), 1);
-  EXPECT_EQ(KeptKinematics(seen, 4, 0), 0);  // seen to follow another candidate now
-  EXPECT_EQ(KeptKinematics(seen, 5, kStaticKinematics), kStaticKinematics);
-  EXPECT_EQ(KeptKinematics(seen, 5, std::nullopt), std::nullopt);
+  const std::optional<int> seen = 1, never;
+  EXPECT_EQ(KeptKinematics(seen, kStaticKinematics), 1);  // a mover taken as static for a while
+  EXPECT_EQ(KeptKinematics(seen, std::nullopt), 1);
+  EXPECT_EQ(KeptKinematics(seen, 0), 0);  // seen to follow another candidate now
+  EXPECT_EQ(KeptKinematics(never, kStaticKinematics), kStaticKinematics);
+  EXPECT_EQ(KeptKinematics(never, std::nullopt), std::nullopt);
 }
 
 TEST(JointChains, IsTheJointEstimateOfBothRobotsData) {
