@@ -375,6 +375,7 @@ void ParseSmoother(Section& filter, robot_agent::SmootherOptions* d) {
   d->lost_after_keyframes = s.Get("lost_after_keyframes", d->lost_after_keyframes);
   d->min_recovery_readings = s.Get("min_recovery_readings", d->min_recovery_readings);
   d->max_relocation_m = s.Get("max_relocation_m", d->max_relocation_m);
+  d->mover_memory_s = s.Get("mover_memory_s", d->mover_memory_s);
   s.RejectUnknownKeys();
 }
 
@@ -766,6 +767,8 @@ void CheckSmoother(const robot_agent::SmootherOptions& s, Checker* c) {
            "must be at least 2");
   c->Check(s.max_relocation_m > 0.0 && std::isfinite(s.max_relocation_m), "filter.smoother.max_relocation_m",
            s.max_relocation_m, "must be positive");
+  c->Check(s.mover_memory_s >= 0.0 && std::isfinite(s.mover_memory_s), "filter.smoother.mover_memory_s",
+           s.mover_memory_s, "must be finite and not negative");
 }
 
 // The filter.

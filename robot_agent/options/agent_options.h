@@ -49,6 +49,10 @@ struct SmootherOptions {
   int lost_after_keyframes = 3;
   int min_recovery_readings = 3;
   double max_relocation_m = 2.0;  // how far from the believed pose the search looks
+  // Among movers of unknown kinematics (constant_turn_rate): the correlation time in seconds of a
+  // mover's velocity, over which the motion of a mover no reading shows dies out (MoverMemory);
+  // 0: predicted by its last (v, w) for as long as the front end holds it.
+  double mover_memory_s = 1.0;
 };
 
 struct FilterOptions {

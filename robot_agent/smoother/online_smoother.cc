@@ -39,8 +39,14 @@ OnlineSmoother::OnlineSmoother(const AgentOptions& options, std::uint64_t seed)
     : options_(options),
       front_end_(filters::CreateFastSlam(FrontEndOptions(options), seed)),
       calibration_(options.filter),
-      graph_(options, options.initial_pose) {
+      graph_(options, options.initial_pose),
+      movers_(options.filter.smoother.mover_memory_s, options.noise.landmark_process_var, options.dt_s) {
   front_ = front_end_->Estimate();
+}
+
+bool OnlineSmoother::RemembersMovers() const {
+  return options_.filter.smoother.mover_memory_s > 0.0 &&
+         options_.filter.landmark_kinematics == LandmarkKinematics::kConstantTurnRate;
 }
 
 std::vector<KeyframeGraph::Reading> OnlineSmoother::LabelledReadings(const common::SensorStep& step,
@@ -74,6 +80,14 @@ void OnlineSmoother::UpdateTracks(const FilterEstimate& front) {
 }
 
 void OnlineSmoother::Process(const common::SensorStep& step) {
+  Advance(step);
+  if (!RemembersMovers()) return;
+  const std::vector<MapLandmark> own = OwnLandmarks(step_);
+  const double gate_d2 = common::ChiSquare2Quantile(options_.cooperation.match_gate_probability);
+  movers_.Remember(own, front_.step, front_.time_s, gate_d2);
+}
+
+void OnlineSmoother::Advance(const common::SensorStep& step) {
   step_ = static_cast<int>(step.lidar.stamp.step);
   front_end_->Process(step);
   front_ = front_end_->Estimate();
@@ -249,12 +263,33 @@ std::vector<MapLandmark> OnlineSmoother::GraphLandmarks(int step) const {
 
 void OnlineSmoother::Io(common::Archive& ar) {
   front_end_->Io(ar);
-  ar(calibration_, graph_, front_, step_, since_keyframe_, lost_keyframes_, lost_since_step_, recoveries_, peers_);
+  ar(calibration_, graph_, front_, step_, since_keyframe_, lost_keyframes_, lost_since_step_, recoveries_, peers_,
+     movers_);
 }
 
 std::size_t OnlineSmoother::EstimatorBytes() const {
   return sizeof(*this) + front_end_->EstimatorBytes() + filters::EstimateBytes(front_) + graph_.EstimatorBytes() +
-         peers_.Bytes();
+         peers_.Bytes() + movers_.Bytes();
+}
+
+// The own map: the graph's landmarks and the front end's others (not in the graph yet),
+// re-anchored: where the front end sees them from its pose, seen from the graph's.
+std::vector<MapLandmark> OnlineSmoother::OwnLandmarks(int step) const {
+  std::vector<MapLandmark> out = GraphLandmarks(step);
+  std::set<std::uint32_t> in_graph;
+  for (const MapLandmark& l : out) in_graph.insert(l.track_id);
+  const Pose2 shift = common::Compose(graph_.Pose(), common::Inverse(front_.pose));
+  const Eigen::Matrix2d rot = common::ComposeJacobianRight(shift, {}).topLeftCorner<2, 2>();
+  for (const MapLandmark& l : front_.landmarks) {
+    if (in_graph.count(l.track_id) > 0) continue;
+    MapLandmark m = l;
+    m.mean = common::Compose(shift, Pose2::FromVector(l.mean)).Vector();
+    m.covariance.topLeftCorner<2, 2>() = rot * l.covariance.topLeftCorner<2, 2>() * rot.transpose();
+    m.covariance.block<2, 1>(0, 2) = rot * l.covariance.block<2, 1>(0, 2);
+    m.covariance.block<1, 2>(2, 0) = m.covariance.block<2, 1>(0, 2).transpose();
+    out.push_back(m);
+  }
+  return out;
 }
 
 FilterEstimate OnlineSmoother::Estimate() const {
@@ -267,24 +302,10 @@ FilterEstimate OnlineSmoother::Estimate() const {
   out.particles = front_.particles;
   out.labels_detections = true;
   out.detection_tracks = front_.detection_tracks;
-  out.landmarks = GraphLandmarks(static_cast<int>(out.step));
-  std::set<std::uint32_t> in_graph;
-  for (const MapLandmark& l : out.landmarks) in_graph.insert(l.track_id);
-  // The front end's other landmarks (not in the graph yet), re-anchored: where the front end
-  // sees them from its pose, seen from the graph's.
-  const Pose2 shift = common::Compose(out.pose, common::Inverse(front_.pose));
-  const Eigen::Matrix2d rot = common::ComposeJacobianRight(shift, {}).topLeftCorner<2, 2>();
-  for (const MapLandmark& l : front_.landmarks) {
-    if (in_graph.count(l.track_id) > 0) continue;
-    MapLandmark m = l;
-    m.mean = common::Compose(shift, Pose2::FromVector(l.mean)).Vector();
-    m.covariance.topLeftCorner<2, 2>() = rot * l.covariance.topLeftCorner<2, 2>() * rot.transpose();
-    m.covariance.block<2, 1>(0, 2) = rot * l.covariance.block<2, 1>(0, 2);
-    m.covariance.block<1, 2>(2, 0) = m.covariance.block<2, 1>(0, 2).transpose();
-    out.landmarks.push_back(m);
-  }
-  peers_.AppendUnmatched(&out.landmarks, common::ChiSquare2Quantile(options_.cooperation.match_gate_probability),
-                         options_.cooperation.merge_min_separation_m);
+  out.landmarks = OwnLandmarks(static_cast<int>(out.step));
+  const double gate_d2 = common::ChiSquare2Quantile(options_.cooperation.match_gate_probability);
+  if (RemembersMovers()) movers_.Apply(&out.landmarks, out.time_s);
+  peers_.AppendUnmatched(&out.landmarks, gate_d2, options_.cooperation.merge_min_separation_m);
   return out;
 }
 

@@ -9,6 +9,7 @@
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/options/agent_options.h"
 #include "robot_agent/smoother/keyframe_graph.h"
+#include "robot_agent/smoother/mover_memory.h"
 #include "robot_agent/smoother/peer_landmarks.h"
 
 namespace mrslam::robot_agent::smoother {
@@ -66,6 +67,12 @@ class OnlineSmoother : public filters::SlamFilter {
   void UpdateTracks(const filters::FilterEstimate& front);
   filters::MapLandmark FrontLandmark(std::uint32_t track) const;
   std::vector<filters::MapLandmark> GraphLandmarks(int step) const;
+  std::vector<filters::MapLandmark> OwnLandmarks(int step) const;
+  // Process but for the movers' memory.
+  void Advance(const common::SensorStep& step);
+  // Whether movers out of sight are shown by MoverMemory (filter.smoother.mover_memory_s, among
+  // movers of unknown kinematics).
+  bool RemembersMovers() const;
   // How well pose x explains the newest keyframe's readings by the static map: readings within
   // the gate of a mapped landmark (with the landmark each is relabelled to), mapped landmarks
   // well inside the view (within 0.9 of the range, 0.45 of the field of view) and how many of
@@ -91,6 +98,7 @@ class OnlineSmoother : public filters::SlamFilter {
   int lost_since_step_ = -1;  // the first keyframe of the current run of misfits
   int recoveries_ = 0;
   PeerLandmarks peers_;
+  MoverMemory movers_;
 };
 
 }  // namespace mrslam::robot_agent::smoother

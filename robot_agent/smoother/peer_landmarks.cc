@@ -71,23 +71,30 @@ void PeerLandmarks::AppendUnmatched(std::vector<filters::MapLandmark>* map, doub
   }
 }
 
+Look LookFor(const filters::MapLandmark& landmark, const common::Pose2& pose, const Eigen::Matrix2d& pose_xy,
+             double heading_var, const std::vector<common::LandmarkDetection>& readings,
+             const common::LidarOptions& lidar, double gate_d2) {
+  const Eigen::Vector2d l = landmark.mean.head<2>();
+  const common::RangeBearing h = common::MeasureRangeBearing(pose, l);
+  if (!WellInView(h, lidar)) return Look::kOutOfView;
+  const double bearing_var = lidar.bearing_noise_sd_rad * lidar.bearing_noise_sd_rad + heading_var;
+  const double s2 = lidar.range_noise_sd_m * lidar.range_noise_sd_m + h.range_m * h.range_m * bearing_var;
+  const Eigen::Matrix2d info =
+      (landmark.covariance.topLeftCorner<2, 2>() + pose_xy + s2 * Eigen::Matrix2d::Identity()).inverse();
+  const bool explained = std::any_of(readings.begin(), readings.end(), [&](const common::LandmarkDetection& z) {
+    const Eigen::Vector2d d = common::PointFromRangeBearing(pose, {z.range_m, z.bearing_rad}) - l;
+    return d.dot(info * d) <= gate_d2;
+  });
+  return explained ? Look::kExplained : Look::kMissed;
+}
+
 void PeerLandmarks::CountMisses(const common::Pose2& pose, const Eigen::Matrix2d& pose_xy, double heading_var,
                                 const std::vector<common::LandmarkDetection>& readings,
                                 const common::LidarOptions& lidar, double gate_d2) {
-  const double bearing_var = lidar.bearing_noise_sd_rad * lidar.bearing_noise_sd_rad + heading_var;
   const int drop_after = MissesToDrop(lidar.detection_probability);
   for (Held& held : held_) {
-    const Eigen::Vector2d l = held.landmark.mean.head<2>();
-    const common::RangeBearing h = common::MeasureRangeBearing(pose, l);
-    if (!WellInView(h, lidar)) continue;
-    const double s2 = lidar.range_noise_sd_m * lidar.range_noise_sd_m + h.range_m * h.range_m * bearing_var;
-    const Eigen::Matrix2d info =
-        (held.landmark.covariance.topLeftCorner<2, 2>() + pose_xy + s2 * Eigen::Matrix2d::Identity()).inverse();
-    const bool explained = std::any_of(readings.begin(), readings.end(), [&](const common::LandmarkDetection& z) {
-      const Eigen::Vector2d d = common::PointFromRangeBearing(pose, {z.range_m, z.bearing_rad}) - l;
-      return d.dot(info * d) <= gate_d2;
-    });
-    held.misses = explained ? 0 : held.misses + 1;
+    const Look look = LookFor(held.landmark, pose, pose_xy, heading_var, readings, lidar, gate_d2);
+    if (look != Look::kOutOfView) held.misses = look == Look::kExplained ? 0 : held.misses + 1;
   }
   held_.erase(std::remove_if(held_.begin(), held_.end(), [&](const Held& h) { return h.misses >= drop_after; }),
               held_.end());

@@ -41,10 +41,8 @@ class PeerLandmarks {
   // Appends to map the held landmarks that match none of its own (same rule).
   void AppendUnmatched(std::vector<filters::MapLandmark>* map, double gate_d2, double too_close_m) const;
   // Counts the misses of one step's scan (readings: those that may explain a static landmark)
-  // taken at pose (position covariance pose_xy, heading
-  // variance heading_var). A held landmark at range r is explained by a reading at position z
-  // when d = z - l has d^T (P_l + pose_xy + s^2 I)^-1 d <= gate_d2, s^2 = sd_r^2 + r^2 (sd_b^2 +
-  // heading_var); it is missed when none does while it lies well inside the view (WellInView).
+  // taken at pose (position covariance pose_xy, heading variance heading_var): a held landmark
+  // that LookFor finds missed counts one more miss in a row, one it finds explained none.
   void CountMisses(const common::Pose2& pose, const Eigen::Matrix2d& pose_xy, double heading_var,
                    const std::vector<common::LandmarkDetection>& readings, const common::LidarOptions& lidar,
                    double gate_d2);
@@ -73,5 +71,14 @@ class PeerLandmarks {
 // Whether a point at h from the sensor lies well inside its view: within 0.9 of its range (and
 // beyond its minimum), within 0.45 of its field of view about the heading.
 bool WellInView(const common::RangeBearing& h, const common::LidarOptions& lidar);
+
+// What a scan taken at pose (position covariance pose_xy, heading variance heading_var) says of
+// a mapped landmark: out of view unless it lies well inside the view (WellInView); explained when
+// a reading at position z has d = z - l with d^T (P_l + pose_xy + s^2 I)^-1 d <= gate_d2,
+// s^2 = sd_r^2 + r^2 (sd_b^2 + heading_var) at range r; missed otherwise.
+enum class Look { kOutOfView, kExplained, kMissed };
+Look LookFor(const filters::MapLandmark& landmark, const common::Pose2& pose, const Eigen::Matrix2d& pose_xy,
+             double heading_var, const std::vector<common::LandmarkDetection>& readings,
+             const common::LidarOptions& lidar, double gate_d2);
 
 }  // namespace mrslam::robot_agent::smoother
