@@ -172,5 +172,55 @@ TEST(OnlineSmoother, PeersLandmarksAreShownButDoNotMoveTheEstimate) {
   EXPECT_EQ(PeerLandmarks::MissesToDrop(0.5), 10);
 }
 
+// swarm_8, r1 alone: a mover out of sight is shown where it slows to a stop (MoverMemory) instead
+// of where its last (v, w) would take it. The estimate is the same at every step; the map's moving
+// entries that stand for nothing (3 m or more from every true landmark, scored as ghosts) are
+// fewer, and the others nearer their landmarks.
+TEST(OnlineSmoother, MoversOutOfSightAreNotExtrapolatedAway) {
+  struct Score {
+    int ghosts = 0, placed = 0;
+    double error_m = 0.0;
+  } kept_score, extrapolated_score;
+  for (int seed = 1; seed <= 2; ++seed) {
+    const auto o = common::LoadScenario(Config("swarm_8.yaml"), {"seed=" + std::to_string(seed)});
+    const auto off = common::LoadScenario(Config("swarm_8.yaml"),
+                                          {"seed=" + std::to_string(seed), "filter.smoother.mover_memory_s=0"});
+    const auto source = world_sim::MakeStepSource(o);
+    const common::Pose2 frame = source->Truth().frames.at(0).second;
+    OnlineSmoother kept(common::AgentOptionsFor(o, "r1"), o.seed),
+        extrapolated(common::AgentOptionsFor(off, "r1"), o.seed);
+    // Over the moving entries of a map: those 3 m or more from every true landmark, and the
+    // others' distance to their nearest.
+    const auto add = [&](const filters::FilterEstimate& e, Score* score) {
+      for (const filters::MapLandmark& l : e.landmarks) {
+        if (!l.moving) continue;
+        const Eigen::Vector2d p = common::TransformPoint(frame, l.mean.head<2>());
+        double nearest = 3.0;
+        for (const auto& t : source->Truth().landmarks) nearest = std::min(nearest, (t.pose.Translation() - p).norm());
+        if (nearest >= 3.0) {
+          ++score->ghosts;
+        } else {
+          ++score->placed;
+          score->error_m += nearest;
+        }
+      }
+    };
+    for (int k = 0; k < o.run.steps; ++k) {
+      const common::SensorStep step = source->Step().at(0);
+      kept.Process(step);
+      extrapolated.Process(step);
+      const filters::FilterEstimate a = kept.Estimate(), b = extrapolated.Estimate();
+      ASSERT_EQ(a.pose.Vector(), b.pose.Vector()) << "seed " << seed << " step " << k;
+      ASSERT_EQ(a.covariance, b.covariance) << "seed " << seed << " step " << k;
+      add(a, &kept_score);
+      add(b, &extrapolated_score);
+    }
+  }
+  EXPECT_LT(kept_score.ghosts, extrapolated_score.ghosts);
+  ASSERT_GT(kept_score.placed, 0);
+  ASSERT_GT(extrapolated_score.placed, 0);
+  EXPECT_LT(kept_score.error_m / kept_score.placed, extrapolated_score.error_m / extrapolated_score.placed);
+}
+
 }  // namespace
 }  // namespace mrslam::robot_agent::smoother
