@@ -18,6 +18,7 @@
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/smoother/batch_smoother.h"
 #include "scripts/batch/batch_report.h"
+#include "scripts/batch/joint_graph_oracle.h"
 #include "scripts/batch/joint_oracle.h"
 #include "scripts/batch/oracle_reference.h"
 #include "world_sim/evaluator/metrics.h"
@@ -54,11 +55,13 @@ class Estimator {
       if (!filter_) throw std::runtime_error("filter.type " + options.filter.type + " is not implemented");
     }
   }
-  void Process(const common::SensorStep& step) {
+  // A reference solves only when asked (the step's data added regardless); a filter takes every step.
+  void Process(const common::SensorStep& step, bool solve) {
     if (filter_) {
       filter_->Process(step);
     } else {
-      reference_->Process(step);
+      reference_->Add({step});
+      if (solve) reference_->Solve();
     }
   }
   Output Estimate() const {
@@ -85,26 +88,33 @@ class Team {
       joint_ = std::make_unique<JointOracle>(options, frames);
       return;
     }
+    if (estimators == Estimators::kJointGraphReference) {
+      graph_ = std::make_unique<JointGraphOracle>(options);
+      return;
+    }
     for (std::size_t i = 0; i < options.robots.size(); ++i) {
       own_.emplace_back(options, static_cast<int>(i), seed, estimators == Estimators::kReference);
     }
   }
-  void Process(const std::vector<common::SensorStep>& steps) {
-    if (joint_) joint_->Process(steps);
-    for (std::size_t i = 0; i < own_.size(); ++i) own_[i].Process(steps[i]);
+  void Process(const std::vector<common::SensorStep>& steps, bool solve) {
+    if (joint_) joint_->Process(steps, solve);
+    if (graph_) graph_->Process(steps, solve);
+    for (std::size_t i = 0; i < own_.size(); ++i) own_[i].Process(steps[i], solve);
   }
   Output Estimate(std::size_t i) const {
+    if (graph_) return {graph_->Pose(static_cast<int>(i)), std::nullopt, {}};
     return joint_ ? OutputOf(joint_->Of(static_cast<int>(i))) : own_[i].Estimate();
   }
 
  private:
   std::vector<Estimator> own_;
   std::unique_ptr<JointOracle> joint_;
+  std::unique_ptr<JointGraphOracle> graph_;
 };
 
 // One seed's metrics per robot (scenario order).
 std::vector<RobotRun> RunSeed(const common::ScenarioOptions& options, std::uint64_t seed, Estimators estimators,
-                              bool progress) {
+                              bool progress, int every) {
   common::ProgressLine line;
   const std::size_t last = options.robots.size() - 1;
   const StepObserver observer = [&](std::size_t robot, const common::SensorStep& step, const evaluator::StepScore&) {
@@ -114,7 +124,8 @@ std::vector<RobotRun> RunSeed(const common::ScenarioOptions& options, std::uint6
               k == options.run.steps);
   };
   std::vector<RobotRun> out;
-  for (const evaluator::RobotSummary& s : ScoreSeed(options, seed, estimators, progress ? observer : StepObserver{})) {
+  for (const evaluator::RobotSummary& s :
+       ScoreSeed(options, seed, estimators, progress ? observer : StepObserver{}, every)) {
     out.push_back({s.position_rmse_m, s.heading_rmse_deg, s.landmark_rmse_m, s.dead_reckoning_rmse_m,
                    s.static_landmark_rmse_m, s.moving_landmark_rmse_m, s.moving_completeness, s.mean_nees,
                    s.own_landmark_rmse_m});
@@ -129,6 +140,8 @@ std::string Describe(const common::ScenarioOptions& options, Estimators estimato
       return "the MAP reference";
     case Estimators::kJointReference:
       return "the causal joint MAP reference";
+    case Estimators::kJointGraphReference:
+      return "the causal joint graph reference (poses only)";
     default:
       return options.filter.type + " with " + std::to_string(options.filter.particles) + " particles";
   }
@@ -137,7 +150,8 @@ std::string Describe(const common::ScenarioOptions& options, Estimators estimato
 }  // namespace
 
 std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, std::uint64_t seed,
-                                               Estimators estimators, const StepObserver& observer) {
+                                               Estimators estimators, const StepObserver& observer, int every) {
+  if (every < 1) throw std::invalid_argument("every must be at least 1");
   options.seed = seed;
   const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(options);
   const common::GroundTruth truth0 = source->Truth();
@@ -148,14 +162,20 @@ std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, 
     const common::Pose2& frame = truth0.frames[i].second;
     scorers.emplace_back(frame, evaluator::TruthInOwnFrame(truth0.robots[i].pose, frame), options.sensors.lidar);
   }
-  for (int k = 0; k < options.run.steps; ++k) {
+  std::vector<common::Odometry> odometry(n);  // since the last step scored
+  for (int k = 1; k <= options.run.steps; ++k) {
     const std::vector<common::SensorStep> steps = source->Step();
     const common::GroundTruth truth = source->Truth();
-    team.Process(steps);
+    const bool scored = k % every == 0 || k == options.run.steps;
+    team.Process(steps, scored);
     for (std::size_t i = 0; i < n; ++i) {
+      auto& segments = odometry[i].segments;
+      segments.insert(segments.end(), steps[i].odometry.segments.begin(), steps[i].odometry.segments.end());
+      if (!scored) continue;
       const Output e = team.Estimate(i);
       const evaluator::StepScore score =
-          scorers[i].Add(truth, truth.robots[i].pose, e.pose, e.covariance, e.map, &steps[i].odometry);
+          scorers[i].Add(truth, truth.robots[i].pose, e.pose, e.covariance, e.map, &odometry[i]);
+      segments.clear();
       if (observer) observer(i, steps[i], score);
     }
   }
@@ -166,17 +186,21 @@ std::vector<evaluator::RobotSummary> ScoreSeed(common::ScenarioOptions options, 
 }
 
 int PrintFilterAccuracy(const common::ScenarioOptions& options, std::uint64_t first_seed, int num_seeds, int threads,
-                        const std::string& json_path, Estimators estimators) {
+                        const std::string& json_path, Estimators estimators, int every) {
   // Step progress when seeds run one at a time and take long (the joint reference).
-  const bool progress = threads == 1 && estimators == Estimators::kJointReference;
+  const bool progress =
+      threads == 1 && (estimators == Estimators::kJointReference || estimators == Estimators::kJointGraphReference);
   std::vector<std::vector<RobotRun>> results(num_seeds);
-  ForEachSeed(num_seeds, threads, [&](int s) { results[s] = RunSeed(options, first_seed + s, estimators, progress); });
+  ForEachSeed(num_seeds, threads,
+              [&](int s) { results[s] = RunSeed(options, first_seed + s, estimators, progress, every); });
 
   nlohmann::json json = StartReport(options, first_seed, num_seeds, Describe(options, estimators));
   json["particles"] = options.filter.particles;
-  json["filter"] = estimators == Estimators::kOwnFilter        ? options.filter.type
-                   : estimators == Estimators::kJointReference ? std::string("joint reference")
-                                                               : std::string("reference");
+  json["scored_every_steps"] = every;
+  json["filter"] = estimators == Estimators::kOwnFilter             ? options.filter.type
+                   : estimators == Estimators::kJointReference      ? std::string("joint reference")
+                   : estimators == Estimators::kJointGraphReference ? std::string("joint graph reference")
+                                                                    : std::string("reference");
   std::printf("%-6s %-24s %10s %10s\n", "robot", "metric", "median", "p90");
   for (std::size_t i = 0; i < options.robots.size(); ++i) {
     const std::string& id = options.robots[i].id;

@@ -26,14 +26,14 @@ JointOracle::JointOracle(const common::ScenarioOptions& scenario,
   }
 }
 
-void JointOracle::Process(const std::vector<common::SensorStep>& steps) {
+void JointOracle::Process(const std::vector<common::SensorStep>& steps, bool solve) {
   if (steps.size() != data_.size()) throw std::invalid_argument("the joint oracle needs one step per robot");
   const int k = static_cast<int>(data_.front().size()) + 1;
   for (std::size_t j = 0; j < steps.size(); ++j) data_[j].push_back(steps[j]);
   sets_.Update(k, Contacts(steps, ids_, k, scenario_.rendezvous.enable_from_step));
   for (int i = 0; i < sets_.robots(); ++i) {
     CatchUp(i);
-    robots_[i].smoother->Solve();
+    if (solve) robots_[i].smoother->Solve();
   }
 }
 

@@ -32,8 +32,9 @@ class JointOracle {
   JointOracle(const common::ScenarioOptions& scenario,
               const std::vector<std::pair<std::string, common::Pose2>>& frames);
 
-  // The team's next step (steps[i]: robot i's): the contacts, every robot's data, its solve.
-  void Process(const std::vector<common::SensorStep>& steps);
+  // The team's next step (steps[i]: robot i's): the contacts, every robot's data, and (solve) its
+  // solve.
+  void Process(const std::vector<common::SensorStep>& steps, bool solve = true);
   // Robot i's estimate (its own pose: robot 0 of the smoother), in G_i.
   const robot_agent::smoother::BatchSmoother& Of(int i) const { return *robots_.at(i).smoother; }
   const InformationSets& Sets() const { return sets_; }

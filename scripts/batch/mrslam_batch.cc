@@ -7,6 +7,7 @@
 //     place of each robot's own, on the same data (the lidar reports identities): filter_accuracy;
 //     with --joint, the causal joint oracle: each robot's reference over its own data and what
 //     the robots it met (directly or through others) held then: filter_accuracy, joint_oracle;
+//     with --graph, the same with the agents' joint graph as the solver: joint_graph_oracle;
 //   --transform-reference: per ordered pair of robots, the error of T(G_i <- G_j) at the end of
 //     their first encounter as the joint MAP reference holds it: transform_reference;
 //   --smoother: each robot's error under the MAP smoother of the whole run, jointly and alone, and
@@ -17,9 +18,9 @@
 //     its agent held at the end of a run (or all agents' together): held_reference.
 //
 //   mrslam_batch --scenario FILE --seeds A..B [--set k=v]... [--particles N] [--threads T]
-//                [--reference [--joint] | --transform-reference | --smoother | --slip-recovery |
+//                [--reference [--joint [--graph]] | --transform-reference | --smoother | --slip-recovery |
 //                 --held DIR [--union]]
-//                [--json FILE]
+//                [--every N] [--json FILE]
 #include <cstdint>
 #include <cstdio>
 #include <stdexcept>
@@ -44,9 +45,9 @@ int Main(int argc, char** argv) {
   CLI::App app{"Accuracy of each robot's own filter over seeds (in-process, no DDS)."};
   std::string scenario_path, seeds_text = "1..50", json_path, held_dir;
   std::vector<std::string> overrides;
-  int particles = 0, threads = 1;
-  bool reference = false, joint = false, transform_reference = false, smoother = false, slip_recovery = false,
-       union_all = false;
+  int particles = 0, threads = 1, every = 1;
+  bool reference = false, joint = false, graph = false, transform_reference = false, smoother = false,
+       slip_recovery = false, union_all = false;
   app.add_option("--scenario", scenario_path, "Scenario YAML file")->required();
   app.add_option("--seeds", seeds_text, "Seed range A..B (inclusive)");
   app.add_option("--set", overrides, "Override a scenario key: key.path=value (repeatable)");
@@ -62,6 +63,11 @@ int Main(int argc, char** argv) {
                "With --reference: the causal joint oracle, each robot's reference over its own data and, of "
                "every robot it met directly or through others, the data held at the last contact")
       ->needs(reference_flag);
+  app.add_flag("--graph", graph,
+               "With --reference --joint: the same bookkeeping with the agents' joint graph as the solver (robots "
+               "placed by their mutual detections, odometry corrections estimated; poses only), solved to "
+               "convergence from a cold start at every scored step (see --every)")
+      ->needs("--joint");
   app.add_flag("--transform-reference", transform_reference,
                "Print instead the error of each pair's transform at the end of its first encounter as the "
                "joint MAP reference of both robots holds it");
@@ -79,6 +85,10 @@ int Main(int argc, char** argv) {
                      "and --seeds its seed)");
   app.add_flag("--union", union_all, "With --held: each robot's joint estimate over every agent's logs together")
       ->needs(held_option);
+  app.add_option("--every", every,
+                 "Score (and solve a reference) at every N-th step and the last only: the figures are over "
+                 "those steps (for a long run's reference, and the filter's figures to set beside it)")
+      ->check(CLI::Range(1, 1000000));
   app.add_option("--json", json_path, "Write medians, 90th percentiles and per-seed values here");
   if (const auto status = common::ParseCommandLine("mrslam_batch", app, argc, argv)) return *status;
 
@@ -93,6 +103,8 @@ int Main(int argc, char** argv) {
   }
   // The reference's oracle association: the same detections, with their identities.
   if (reference || transform_reference || smoother) options.sensors.lidar.report_identity = true;
+  if (every > 1 && (transform_reference || smoother || slip_recovery || !held_dir.empty()))
+    throw std::runtime_error("--every goes with the default mode and --reference [--joint] only");
   const auto first_seed = static_cast<std::uint64_t>(seeds.first);
   if (!held_dir.empty()) {
     options.seed = first_seed;
@@ -101,9 +113,10 @@ int Main(int argc, char** argv) {
   if (transform_reference) return PrintTransformReference(options, first_seed, seeds.size(), threads, json_path);
   if (smoother) return PrintSmoother(options, first_seed, seeds.size(), threads, json_path);
   if (slip_recovery) return PrintSlipRecovery(options, first_seed, seeds.size(), threads, json_path);
-  const Estimators estimators =
-      joint ? Estimators::kJointReference : (reference ? Estimators::kReference : Estimators::kOwnFilter);
-  return PrintFilterAccuracy(options, first_seed, seeds.size(), threads, json_path, estimators);
+  const Estimators estimators = graph   ? Estimators::kJointGraphReference
+                                : joint ? Estimators::kJointReference
+                                        : (reference ? Estimators::kReference : Estimators::kOwnFilter);
+  return PrintFilterAccuracy(options, first_seed, seeds.size(), threads, json_path, estimators, every);
 }
 
 }  // namespace

@@ -4,14 +4,17 @@
 #include <cmath>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "common/angles.h"
 #include "common/config/scenario_options.h"
 #include "common/se2.h"
 #include "robot_agent/smoother/batch_smoother.h"
+#include "scripts/batch/joint_graph_oracle.h"
 #include "scripts/batch/oracle_reference.h"
 #include "world_sim/evaluator/metrics.h"
 #include "world_sim/source/step_source_factory.h"
@@ -93,6 +96,55 @@ TEST(JointOracle, EachSmootherHoldsWhatItsContactsHandedOver) {
     for (int j = 0; j < n; ++j) through_others += i != j && !met[i][j] && joint.Sets().Held(i, j) > 0 ? 1 : 0;
   }
   EXPECT_GT(through_others, 0);
+}
+
+TEST(JointOracle, SolvedAtSampledStepsOnlyIsTheSameEstimateThere) {
+  // paper_two_robots seed 1: an oracle that is handed every step but solves every 10th only (a
+  // long run's reference, mrslam_batch --every) has at those steps the estimate of the one that
+  // solves every step: the MAP estimate of the same data, from a colder start.
+  const common::ScenarioOptions o = Scenario("paper_two_robots.yaml");
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
+  JointOracle every(o, source->Truth().frames), sampled(o, source->Truth().frames);
+  for (int k = 1; k <= o.run.steps; ++k) {
+    const std::vector<common::SensorStep> steps = source->Step();
+    every.Process(steps);
+    sampled.Process(steps, k % 10 == 0);
+    if (k % 10 != 0) continue;
+    for (int i = 0; i < 2; ++i) {
+      const common::Pose2 a = every.Of(i).Pose(), b = sampled.Of(i).Pose();
+      EXPECT_LT((a.Translation() - b.Translation()).norm(), 1e-3) << "step " << k << " robot " << i;
+      EXPECT_LT(std::abs(common::WrapAngle(a.heading - b.heading)), 1e-3) << "step " << k << " robot " << i;
+    }
+  }
+}
+
+TEST(JointGraphOracle, IsTheJointOracleOnAStaticWorld) {
+  // swarm_8 without movers, 60 steps, solved every 10th: the agents' joint graph over what each
+  // robot holds (keyframes, corrections estimated) places every robot where the oracle smoother
+  // of the same data does, to within a small part of the error both make (about 0.13 m).
+  const common::ScenarioOptions o = Scenario("swarm_8.yaml", {"landmark_field.moving_fraction=0", "run.steps=60"});
+  const std::unique_ptr<world_sim::StepSource> source = world_sim::MakeStepSource(o);
+  JointOracle oracle(o, source->Truth().frames);
+  JointGraphOracle graph(o);
+  double largest = 0.0;
+  for (int k = 1; k <= o.run.steps; ++k) {
+    const std::vector<common::SensorStep> steps = source->Step();
+    const bool solve = k % 10 == 0;
+    oracle.Process(steps, solve);
+    graph.Process(steps, solve);
+    if (!solve) continue;
+    for (int i = 0; i < static_cast<int>(o.robots.size()); ++i) {
+      largest = std::max(largest, (oracle.Of(i).Pose().Translation() - graph.Pose(i).Translation()).norm());
+    }
+  }
+  EXPECT_LT(largest, 0.02);
+}
+
+TEST(JointGraphOracle, RefusesMoversAndReadingsWithoutIdentities) {
+  EXPECT_THROW(JointGraphOracle(Scenario("swarm_8.yaml")), std::invalid_argument);
+  EXPECT_THROW(JointGraphOracle(common::LoadScenario(std::string(MRSLAM_TEST_SOURCE_DIR) + "/config/swarm_8.yaml",
+                                                     {"landmark_field.moving_fraction=0"})),
+               std::invalid_argument);
 }
 
 TEST(JointOracle, IsNoWorseThanAloneInMedianOverSeeds) {
