@@ -94,30 +94,31 @@ TEST(MoverMemory, AMoverNotReadIsShownAtItsPredictionAndAReadOneAsItIs) {
   EXPECT_EQ(map[0].mean(0), 2.5);
 }
 
-TEST(MoverMemory, ATrackMappedAfterAMoverWasLostWhereItIsPredictedSupersedesIt) {
+// Mover 5, read last at step 10 (t = 5 s), is still held at step 30 (t = 15 s), extrapolated 2 m
+// off; a static track 9 first mapped at step first_seen, read now where 5 is predicted: the map
+// shown.
+std::vector<MapLandmark> ShownBesideATrackFirstMappedAt(std::uint32_t first_seen) {
   MoverMemory memory = Memory();
   memory.Remember({Mover(5, 1.0, 2.0, 0.0, 3, 10)}, 10, 5.0, kGate);
-  // The front end lost track 5 (it still holds it, extrapolated 2 m off) and maps the landmark
-  // again as track 9 (not seen moving yet) where track 5 is predicted.
-  MapLandmark again = Mover(9, 1.25, 2.05, 0.0, 28, 30);
-  again.moving = false;
-  again.motion = filters::LandmarkMotionKind::kStatic;
-  std::vector<MapLandmark> map = {Mover(5, 3.0, 2.0, 0.0, 3, 10), again};
+  MapLandmark other = Mover(9, 1.25, 2.05, 0.0, first_seen, 30);
+  other.moving = false;
+  other.motion = filters::LandmarkMotionKind::kStatic;
+  std::vector<MapLandmark> map = {Mover(5, 3.0, 2.0, 0.0, 3, 10), other};
   memory.Remember(map, 30, 15.0, kGate);
   memory.Apply(&map, 15.0);
+  return map;
+}
+
+TEST(MoverMemory, ATrackMappedAfterAMoverWasLostWhereItIsPredictedSupersedesIt) {
+  // The front end lost track 5 and maps the landmark again as track 9 (not seen moving yet).
+  const std::vector<MapLandmark> map = ShownBesideATrackFirstMappedAt(28);
   ASSERT_EQ(map.size(), 1U);
   EXPECT_EQ(map[0].track_id, 9U);
 }
 
 TEST(MoverMemory, ALandmarkMappedBeforeTheMoverWasLostDoesNotSupersedeIt) {
-  MoverMemory memory = Memory();
-  memory.Remember({Mover(5, 1.0, 2.0, 0.0, 3, 10)}, 10, 5.0, kGate);
-  MapLandmark old = Mover(2, 1.25, 2.05, 0.0, 1, 30);  // a static landmark beside its path
-  old.moving = false;
-  old.motion = filters::LandmarkMotionKind::kStatic;
-  std::vector<MapLandmark> map = {Mover(5, 3.0, 2.0, 0.0, 3, 10), old};
-  memory.Remember(map, 30, 15.0, kGate);
-  memory.Apply(&map, 15.0);
+  // Track 9 is a static landmark beside the mover's path, mapped before it was lost.
+  const std::vector<MapLandmark> map = ShownBesideATrackFirstMappedAt(1);
   EXPECT_EQ(map.size(), 2U);
   ASSERT_NE(Find(map, 5), nullptr);
 }
