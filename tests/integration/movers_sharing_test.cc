@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/integration/child_process.h"
+#include "tests/integration/launch_helpers.h"
 
 namespace mrslam {
 namespace {
@@ -24,19 +25,10 @@ constexpr int kSeeds = 4;
 
 // Runs seeds 1..kSeeds of paper_two_robots with smoother agents into out; the summaries by seed.
 std::vector<nlohmann::json> RunSeeds(const std::string& out, int domain, const std::vector<std::string>& extra) {
-  std::vector<std::string> argv = {testing::BinPath("mrslam_launch"),
-                                   "--scenario",
-                                   testing::SourcePath("config/paper_two_robots.yaml"),
-                                   "--seeds",
-                                   "1.." + std::to_string(kSeeds),
-                                   "--out",
-                                   out,
-                                   "--domain",
-                                   std::to_string(domain),
-                                   "--no-plots",
-                                   "--set",
+  std::vector<std::string> args = {"--seeds", "1.." + std::to_string(kSeeds), "--no-plots", "--set",
                                    "filter.type=smoother"};
-  argv.insert(argv.end(), extra.begin(), extra.end());
+  args.insert(args.end(), extra.begin(), extra.end());
+  const std::vector<std::string> argv = testing::TwoRobotLaunchArgs(out, domain, args);
   ChildProcess launcher(argv, out + ".log");
   EXPECT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + ".log");
   std::vector<nlohmann::json> summaries;
