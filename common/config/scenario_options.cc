@@ -462,6 +462,7 @@ void ParseCooperation(Section& top, ScenarioOptions* o) {
   d.exchange_window_steps = c.Get("exchange_window_steps", d.exchange_window_steps);
   d.max_batch_steps = c.Get("max_batch_steps", d.max_batch_steps);
   d.relay_factors = c.Get("relay_factors", d.relay_factors);
+  d.stream_landmarks = c.Get("stream_landmarks", d.stream_landmarks);
   d.joint_every_s = c.Get("joint_every_s", d.joint_every_s);
   c.RejectUnknownKeys();
 }

@@ -143,7 +143,8 @@ Cooperation::Cooperation(const AgentOptions& options)
       self_index_(options.TeamIndex(options.robot_id)),
       var_range_(options.sensors.lidar.range_noise_sd_m * options.sensors.lidar.range_noise_sd_m),
       var_bearing_(options.sensors.lidar.bearing_noise_sd_rad * options.sensors.lidar.bearing_noise_sd_rad),
-      exchange_(options) {
+      exchange_(options),
+      streamed_(options) {
   // A noiseless lidar still needs a usable measurement covariance.
   var_range_ = std::max(var_range_, 1e-12);
   var_bearing_ = std::max(var_bearing_, 1e-12);
@@ -546,14 +547,27 @@ std::optional<TransformEstimate> Cooperation::JointTransform(const MapSnapshot& 
   return out;
 }
 
+void Cooperation::Share(const common::SensorStep& step, const filters::FilterEstimate& estimate,
+                        const std::optional<common::SensorStep>& labelled) {
+  const bool by_identity = options_.sensors.lidar.report_identity;
+  const auto shared = by_identity ? LabelledStep(step, estimate, true) : labelled;
+  if (!shared) return;
+  const bool stream = options_.cooperation.stream_landmarks;
+  exchange_.RecordOwn(*shared, stream ? TrackEstimates(step, estimate, by_identity) : std::vector<TrackEstimate>{});
+  if (stream) streamed_.Observe(estimate);
+}
+
+void Cooperation::CompleteMap(filters::FilterEstimate* estimate) const {
+  if (options_.cooperation.share_factors && options_.cooperation.stream_landmarks) {
+    streamed_.Append(exchange_.logs(), known_transforms(), estimate);
+  }
+}
+
 void Cooperation::Record(const common::SensorStep& step, const filters::FilterEstimate& estimate) {
   // The history for the joint transform keeps the own tracks (JointTransform labels by them); the
   // steps shared are labelled by identity where the sensor reports one.
   const std::optional<common::SensorStep> labelled = LabelledStep(step, estimate, false);
-  if (options_.cooperation.share_factors) {
-    const auto shared = options_.sensors.lidar.report_identity ? LabelledStep(step, estimate, true) : labelled;
-    if (shared) exchange_.RecordOwn(*shared);
-  }
+  if (options_.cooperation.share_factors) Share(step, estimate, labelled);
   const bool fits = labelled && step.lidar.stamp.step == history_.size() + 1 &&
                     history_.size() < static_cast<std::size_t>(options_.cooperation.max_history_steps);
   if (!history_usable_ || !fits) {

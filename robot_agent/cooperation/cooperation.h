@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -10,6 +11,7 @@
 #include "robot_agent/cooperation/joint_chains.h"
 #include "robot_agent/cooperation/peer_messages.h"
 #include "robot_agent/cooperation/rendezvous.h"
+#include "robot_agent/cooperation/streamed_landmarks.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/options/agent_options.h"
 #include "robot_agent/smoother/batch_smoother.h"
@@ -69,8 +71,13 @@ class Cooperation {
   // Per peer whose map snapshot arrived: its tracks, each with the own track it was matched to
   // and its kinematics (the newest snapshot's word on a track).
   PeerTrackLinks track_links() const;
+  // Appends to estimate's map the peers' landmarks streamed with their raw measurements that it
+  // does not hold (cooperation.stream_landmarks; StreamedLandmarks): for the estimate published.
+  void CompleteMap(filters::FilterEstimate* estimate) const;
   // The raw measurements held, the own and the peers' (cooperation.share_factors).
   const FactorExchange& exchange() const { return exchange_; }
+  // The bytes the streamed landmarks' bookkeeping holds (StreamedLandmarks::Bytes).
+  std::size_t streamed_bytes() const { return streamed_.Bytes(); }
   // Landmark-moved notices accepted so far (the ELA filter will use them).
   int moved_notices() const { return moved_notices_; }
   // Mutual detections used to correct the own pose (cooperative localization).
@@ -83,6 +90,7 @@ class Cooperation {
     ar(peers_, rendezvous_, last_step_, any_step_, rejected_, stale_, moved_notices_, cooperative_updates_,
        joint_estimates_, first_pose_, history_, history_usable_);
     exchange_.Io(ar);
+    streamed_.Io(ar);
   }
 
  private:
@@ -168,6 +176,10 @@ class Cooperation {
   std::optional<smoother::BatchSmoother::Kinematics> JointKinematics(const filters::MapLandmark& l) const;
   // Keeps the step in the own history (while it is usable for the joint estimate).
   void Record(const common::SensorStep& step, const filters::FilterEstimate& estimate);
+  // The own step into the exchange (with the estimates of the landmarks it read) and the misses
+  // of the streamed landmarks it shows.
+  void Share(const common::SensorStep& step, const filters::FilterEstimate& estimate,
+             const std::optional<common::SensorStep>& labelled);
   // Whether an estimate made at step still refines the peer's current rendezvous event.
   bool Refining(const PeerState& peer, std::uint32_t step) const;
   // Holds t as the transform to peer, estimated at step (and as the event's, while refining).
@@ -200,6 +212,7 @@ class Cooperation {
   std::vector<common::SensorStep> history_;
   bool history_usable_ = true;
   FactorExchange exchange_;
+  StreamedLandmarks streamed_;
 };
 
 }  // namespace mrslam::robot_agent::cooperation

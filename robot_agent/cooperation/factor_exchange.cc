@@ -5,6 +5,8 @@
 #include <iterator>
 #include <set>
 
+#include "common/gaussian.h"
+
 namespace mrslam::robot_agent::cooperation {
 namespace {
 
@@ -15,6 +17,15 @@ bool FinitePose(const common::Pose2& p) { return std::isfinite(p.x) && std::isfi
 bool Reading(double range_m, double bearing_rad, double time_s) {
   return std::isfinite(range_m) && range_m > 0.0 && std::isfinite(bearing_rad) && std::isfinite(time_s);
 }
+
+// The label a detection of track `track` (0: none) is shared with, 0 when it is left out.
+std::uint32_t Label(const common::LandmarkDetection& d, std::uint32_t track, bool by_identity) {
+  if (by_identity && d.landmark_id >= 0) return static_cast<std::uint32_t>(d.landmark_id) + 1;
+  return track;
+}
+
+// A value rounded to single precision.
+double Single(double x) { return static_cast<double>(static_cast<float>(x)); }
 
 }  // namespace
 
@@ -29,16 +40,31 @@ std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, c
   kept.odometry = step.odometry;
   for (std::size_t i = 0; i < step.lidar.landmarks.size(); ++i) {
     common::LandmarkDetection d = step.lidar.landmarks[i];
-    if (by_identity && d.landmark_id >= 0) {
-      d.landmark_id += 1;  // the identity the sensor reports, the same for every robot
-    } else if (estimate.detection_tracks[i] != 0) {
-      d.landmark_id = static_cast<int>(estimate.detection_tracks[i]);
-    } else {
-      continue;
-    }
+    // By identity: the identity the sensor reports + 1, the same for every robot.
+    const std::uint32_t label = Label(d, estimate.detection_tracks[i], by_identity);
+    if (label == 0) continue;
+    d.landmark_id = static_cast<int>(label);
     kept.lidar.landmarks.push_back(d);
   }
   return kept;
+}
+
+std::vector<TrackEstimate> TrackEstimates(const common::SensorStep& step, const filters::FilterEstimate& estimate,
+                                          bool by_identity) {
+  std::vector<TrackEstimate> out;
+  if (!estimate.labels_detections || estimate.detection_tracks.size() != step.lidar.landmarks.size()) return out;
+  std::set<std::uint32_t> labels;
+  for (std::size_t i = 0; i < step.lidar.landmarks.size(); ++i) {
+    const std::uint32_t track = estimate.detection_tracks[i];
+    const std::uint32_t label = Label(step.lidar.landmarks[i], track, by_identity);
+    if (track == 0 || label == 0 || !labels.insert(label).second) continue;
+    const auto l = std::find_if(estimate.landmarks.begin(), estimate.landmarks.end(),
+                                [&](const filters::MapLandmark& m) { return m.track_id == track; });
+    if (l == estimate.landmarks.end() || l->tentative) continue;
+    out.push_back({label, step.lidar.stamp.step, l->mean, l->covariance.topLeftCorner<2, 2>(), l->covariance(2, 2),
+                   l->v_mps, l->w_radps, l->moving});
+  }
+  return out;
 }
 
 std::int32_t TimeOffsetUs(double time_s, double step_time_s) {
@@ -51,18 +77,32 @@ double OffsetTime(double step_time_s, std::int32_t offset_us) { return step_time
 
 common::SensorStep SharedPrecision(common::SensorStep step) {
   const double t0 = step.lidar.stamp.time_s;
-  const auto single = [](double x) { return static_cast<double>(static_cast<float>(x)); };
   const auto offset = [&](double t) { return OffsetTime(t0, TimeOffsetUs(t, t0)); };
   step.odometry.stamp = step.lidar.stamp;
-  for (auto& o : step.odometry.segments) o = {offset(o.time_s), single(o.dt_s), single(o.v_mps), single(o.w_radps)};
+  for (auto& o : step.odometry.segments) o = {offset(o.time_s), Single(o.dt_s), Single(o.v_mps), Single(o.w_radps)};
   const auto reading = [&](auto& d) {
     d.time_s = offset(d.time_s);
-    d.range_m = single(d.range_m);
-    d.bearing_rad = single(d.bearing_rad);
+    d.range_m = Single(d.range_m);
+    d.bearing_rad = Single(d.bearing_rad);
   };
   for (auto& d : step.lidar.landmarks) reading(d);
   for (auto& d : step.lidar.robots) reading(d);
   return step;
+}
+
+TrackEstimate SharedPrecision(TrackEstimate t) {
+  t.mean = t.mean.unaryExpr(&Single);
+  t.position_covariance = t.position_covariance.unaryExpr(&Single);
+  t.heading_var = Single(t.heading_var);
+  t.v_mps = Single(t.v_mps);
+  t.w_radps = Single(t.w_radps);
+  return t;
+}
+
+bool TrackEstimateValid(const TrackEstimate& t, std::uint32_t first, std::uint32_t last) {
+  return t.label >= 1 && t.step >= first && t.step <= last && t.mean.allFinite() && std::isfinite(t.v_mps) &&
+         std::isfinite(t.w_radps) && std::isfinite(t.heading_var) && t.heading_var >= 0.0 &&
+         common::IsSymmetricPositiveDefinite<2>(t.position_covariance);
 }
 
 bool SharedStepValid(const common::SensorStep& s, std::uint32_t step) {
@@ -105,12 +145,12 @@ std::size_t FactorExchange::HeldBytes() const {
       counted.bytes += filters::ElementBytes(s.lidar.landmarks) + filters::ElementBytes(s.lidar.robots) +
                        filters::ElementBytes(s.odometry.segments);
     }
-    bytes += filters::ElementBytes(log.steps) + counted.bytes;
+    bytes += filters::ElementBytes(log.steps) + counted.bytes + log.tracks.size() * sizeof(TrackEstimate);
   }
   return bytes;
 }
 
-void FactorExchange::RecordOwn(const common::SensorStep& labelled) {
+void FactorExchange::RecordOwn(const common::SensorStep& labelled, const std::vector<TrackEstimate>& tracks) {
   FactorLog& own = logs_[self_];
   const std::uint32_t k = labelled.lidar.stamp.step;
   if (!own_growing_ || k != own.Held() + 1) {
@@ -118,6 +158,13 @@ void FactorExchange::RecordOwn(const common::SensorStep& labelled) {
     return;
   }
   own.steps.push_back(SharedPrecision(labelled));
+  for (const TrackEstimate& t : tracks) {
+    const auto held = own.tracks.find(t.label);
+    if (t.step != k || (held != own.tracks.end() && !t.moving && t.step < held->second.step + kTrackRefreshSteps)) {
+      continue;
+    }
+    own.tracks[t.label] = SharedPrecision(t);
+  }
   if (static_cast<int>(k) < options_.rendezvous.enable_from_step) return;
   for (const auto& d : labelled.lidar.robots) {
     if (d.seen_robot_id != self_ && options_.TeamIndex(d.seen_robot_id) >= 0) detected_at_[d.seen_robot_id] = k;
@@ -170,8 +217,11 @@ void FactorExchange::AddRuns(const std::string& peer, std::uint32_t k, FactorBat
     if (from >= log.Held()) continue;
     if (origin != self_ && (log.Held() - from <= kRelayLagSteps || FedByAnother(peer, origin, k))) continue;
     const std::uint32_t to = std::min<std::uint32_t>(log.Held(), from + static_cast<std::uint32_t>(budget));
-    FactorRun run{origin, from + 1, log.first_pose, {}};
+    FactorRun run{origin, from + 1, log.first_pose, {}, {}};
     run.steps.assign(log.steps.begin() + from, log.steps.begin() + to);
+    for (const auto& [label, t] : log.tracks) {
+      if (t.step > from && t.step <= to) run.tracks.push_back(t);
+    }
     budget -= run.steps.size();
     steps_sent_ += run.steps.size();
     sends_[peer][origin][k] = to;
@@ -232,6 +282,11 @@ bool FactorExchange::BatchValid(const FactorBatch& b) const {
     for (std::size_t i = 0; i < run.steps.size(); ++i) {
       if (!SharedStepValid(run.steps[i], run.first_step + static_cast<std::uint32_t>(i))) return false;
     }
+    const auto last = run.first_step + static_cast<std::uint32_t>(run.steps.size()) - 1;
+    if (run.tracks.size() > kMaxItems || (!run.tracks.empty() && run.steps.empty())) return false;
+    for (const auto& t : run.tracks) {
+      if (!TrackEstimateValid(t, run.first_step, last)) return false;
+    }
   }
   return b.opening.size() <= 1 && (b.opening.empty() || SharedStepValid(b.opening[0], b.opened_by_step));
 }
@@ -260,6 +315,10 @@ void FactorExchange::Apply(const FactorRun& run, const PeerHeader& from) {
   steps_again_ += std::min(skip, run.steps.size());
   if (skip >= run.steps.size()) return;
   log.steps.insert(log.steps.end(), run.steps.begin() + static_cast<std::ptrdiff_t>(skip), run.steps.end());
+  for (const TrackEstimate& t : run.tracks) {
+    const auto held_track = log.tracks.find(t.label);
+    if (t.step > held && (held_track == log.tracks.end() || held_track->second.step < t.step)) log.tracks[t.label] = t;
+  }
   log.fed_by = from.sender;
   log.fed_at = from.step;
   steps_received_ += run.steps.size() - skip;

@@ -22,15 +22,17 @@
 namespace mrslam::robot_agent::cooperation {
 
 // One robot's steps as an agent holds them: its first pose in its own frame and its steps
-// 1..n without a gap (steps[i] is step i + 1).
+// 1..n without a gap (steps[i] is step i + 1), and the newest estimate of each of its labels at
+// a step held.
 struct FactorLog {
   common::Pose2 first_pose;
   std::vector<common::SensorStep> steps;
-  std::string fed_by;        // the peer that last sent new steps of it (empty: none, the own log)
-  std::uint32_t fed_at = 0;  // the step of that peer's batch
+  std::map<std::uint32_t, TrackEstimate> tracks;  // by label
+  std::string fed_by;                             // the peer that last sent new steps of it (empty: none, the own log)
+  std::uint32_t fed_at = 0;                       // the step of that peer's batch
 
   std::uint32_t Held() const { return static_cast<std::uint32_t>(steps.size()); }
-  void Io(common::Archive& ar) { ar(first_pose, steps, fed_by, fed_at); }
+  void Io(common::Archive& ar) { ar(first_pose, steps, tracks, fed_by, fed_at); }
 };
 
 // The step as a measurement to share: its odometry, its robot detections and its landmark
@@ -41,6 +43,11 @@ struct FactorLog {
 std::optional<common::SensorStep> LabelledStep(const common::SensorStep& step, const filters::FilterEstimate& estimate,
                                                bool by_identity);
 
+// The estimates of the landmarks the step's labelled detections name (labelled as LabelledStep
+// labels them): each confirmed landmark of estimate a detection is associated with, once.
+std::vector<TrackEstimate> TrackEstimates(const common::SensorStep& step, const filters::FilterEstimate& estimate,
+                                          bool by_identity);
+
 // The step in the precision it is shared in (docs/cooperation.md, "Size and precision"): one stamp
 // (the odometry's is the scan's); each time the step's time plus a whole number of microseconds
 // (TimeOffsetUs, within +-kMaxTimeOffsetUs); each value rounded to single precision (about 1e-7
@@ -50,11 +57,15 @@ constexpr std::int32_t kMaxTimeOffsetUs = 1'000'000'000;
 std::int32_t TimeOffsetUs(double time_s, double step_time_s);
 double OffsetTime(double step_time_s, std::int32_t offset_us);
 common::SensorStep SharedPrecision(common::SensorStep step);
+TrackEstimate SharedPrecision(TrackEstimate t);
 
 // Whether s is a well-formed shared step `step`: that stamp, finite values, a positive range,
 // a track label on every landmark detection, a seen robot named on every robot detection, no
 // IMU, at most 256 items per kind.
 bool SharedStepValid(const common::SensorStep& s, std::uint32_t step);
+// Whether t is a well-formed estimate of a run's steps first..last: a label from 1, a step in the
+// run, finite values, a positive definite position covariance, a non-negative heading variance.
+bool TrackEstimateValid(const TrackEstimate& t, std::uint32_t first, std::uint32_t last);
 
 // An agent's side of the exchange. Pure; not thread-safe.
 //
@@ -65,7 +76,8 @@ bool SharedStepValid(const common::SensorStep& s, std::uint32_t step);
 // steps, as the peer may have had them from others meanwhile. Then it carries the steps that peer
 // lacks: of every origin it holds (only its own with relaying off), but
 // the peer's own, from what was sent before (taken as on its way), at most
-// cooperation.max_batch_steps steps in all, its own origin first. Another origin's steps go only
+// cooperation.max_batch_steps steps in all, its own origin first; a run carries the origin's track
+// estimates made at its steps (TrackEstimate). Another origin's steps go only
 // once the peer lacks more than kRelayLagSteps of them: a peer that lacks fewer most likely gets
 // them from the origin itself or from another relay, and sending them too would double them. What does not fit goes at
 // the next step of the window or of the next one. Nor does another origin's step go to a peer that says another robot
@@ -84,13 +96,15 @@ class FactorExchange {
  public:
   static constexpr std::uint32_t kAckLagSteps = 2;
   static constexpr std::uint32_t kRelayLagSteps = 10;
+  static constexpr std::uint32_t kTrackRefreshSteps = 10;
 
   explicit FactorExchange(const AgentOptions& options);
 
-  // The own step k (LabelledStep) goes into the own log, in SharedPrecision; its robot
-  // detections open the window to those peers. A step that does not follow the last one ends
-  // the own log's growth (a gap cannot be shared).
-  void RecordOwn(const common::SensorStep& labelled);
+  // The own step k (LabelledStep) goes into the own log, in SharedPrecision, with the estimates
+  // of the landmarks it read (TrackEstimates; a label's estimate is renewed when it is a mover's
+  // or kTrackRefreshSteps old); its robot detections open the window to those peers. A step that
+  // does not follow the last one ends the own log's growth (a gap cannot be shared).
+  void RecordOwn(const common::SensorStep& labelled, const std::vector<TrackEstimate>& tracks = {});
   // The batches to send after step k (header: sender, recipient, k, time_s; sequence 0).
   std::vector<FactorBatch> Outgoing(std::uint32_t k, double time_s);
   // Validates and applies one batch; false when it is rejected.

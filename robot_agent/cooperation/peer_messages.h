@@ -64,6 +64,24 @@ struct LandmarkMovedNotice {
   Eigen::Vector2d position_in_sender = Eigen::Vector2d::Zero();
 };
 
+// The origin's estimate, in its own frame, of the landmark it labels `label` in its shared steps,
+// as of its step `step` (one that read it): shared beside the steps so that every agent can show
+// the landmarks its peers map (docs/cooperation.md, "Peers' landmarks streamed"). Not a
+// measurement: no graph takes it in.
+struct TrackEstimate {
+  std::uint32_t label = 0;
+  std::uint32_t step = 0;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();  // x_m, y_m, heading_rad
+  // The position block and the heading variance (the cross terms are not shared).
+  Eigen::Matrix2d position_covariance = Eigen::Matrix2d::Identity();
+  double heading_var = 0.0;
+  double v_mps = 0.0;
+  double w_radps = 0.0;
+  bool moving = false;
+
+  void Io(common::Archive& ar) { ar(label, step, mean, position_covariance, heading_var, v_mps, w_radps, moving); }
+};
+
 // Raw measurements shared (factor_exchange.h). A run of one origin's steps in a batch: first_step .. first_step +
 // steps.size() - 1.
 struct FactorRun {
@@ -71,6 +89,7 @@ struct FactorRun {
   std::uint32_t first_step = 1;
   common::Pose2 first_pose;  // the origin's first pose in its own frame
   std::vector<common::SensorStep> steps;
+  std::vector<TrackEstimate> tracks;  // the origin's newest estimates made at these steps
 };
 
 // How many steps of an origin the sender holds, and who last sent it new ones of that origin at
@@ -126,7 +145,7 @@ inline void Io(common::Archive& ar, MapSnapshot& m) {
 inline void Io(common::Archive& ar, LandmarkMovedNotice& n) {
   ar(n.header, n.track_id, n.landmark_id, n.position_in_sender);
 }
-inline void Io(common::Archive& ar, FactorRun& r) { ar(r.origin, r.first_step, r.first_pose, r.steps); }
+inline void Io(common::Archive& ar, FactorRun& r) { ar(r.origin, r.first_step, r.first_pose, r.steps, r.tracks); }
 inline void Io(common::Archive& ar, FactorHolding& h) { ar(h.origin, h.steps, h.fed_by, h.fed_at); }
 inline void Io(common::Archive& ar, FactorBatch& b) { ar(b.header, b.opened_by_step, b.holdings, b.runs, b.opening); }
 

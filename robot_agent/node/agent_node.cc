@@ -571,7 +571,9 @@ struct AgentNode::Impl {
     const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s);
     const auto sent = Send(std::move(outbox));
     LogRendezvous(k, *last);
-    msg::Estimate m = ToMsg(joint_tracker.Corrected(estimate), agent.robot_id, agent.filter.type);
+    filters::FilterEstimate published = joint_tracker.Corrected(estimate);
+    cooperation.CompleteMap(&published);
+    msg::Estimate m = ToMsg(published, agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
     m.frames_known(cooperation.frames_known());
     m.data_held(DataHeldMsg(cooperation.data_held()));
@@ -579,7 +581,7 @@ struct AgentNode::Impl {
     m.step_cpu_ms(step_cpu_ms);
     m.peer_bytes_sent(Total(bytes_sent_to));
     m.peer_bytes_received(Total(bytes_received_from));
-    m.estimator_bytes(filter->EstimatorBytes() + cooperation.exchange().HeldBytes());
+    m.estimator_bytes(filter->EstimatorBytes() + cooperation.exchange().HeldBytes() + cooperation.streamed_bytes());
     step_times[k] = time_s;
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));

@@ -54,6 +54,36 @@ msg::SharedStep ToSharedStep(const common::SensorStep& step) {
   }
   return m;
 }
+msg::SharedTrack ToSharedTrack(const cooperation::TrackEstimate& t) {
+  msg::SharedTrack m;
+  m.label(t.label);
+  m.step(t.step);
+  m.x_m(static_cast<float>(t.mean.x()));
+  m.y_m(static_cast<float>(t.mean.y()));
+  m.heading_rad(static_cast<float>(t.mean.z()));
+  m.cov_xx(static_cast<float>(t.position_covariance(0, 0)));
+  m.cov_xy(static_cast<float>(t.position_covariance(0, 1)));
+  m.cov_yy(static_cast<float>(t.position_covariance(1, 1)));
+  m.heading_var(static_cast<float>(t.heading_var));
+  m.v_mps(static_cast<float>(t.v_mps));
+  m.w_radps(static_cast<float>(t.w_radps));
+  m.moving(t.moving);
+  return m;
+}
+
+cooperation::TrackEstimate FromSharedTrack(const msg::SharedTrack& m) {
+  cooperation::TrackEstimate t;
+  t.label = m.label();
+  t.step = m.step();
+  t.mean = {m.x_m(), m.y_m(), m.heading_rad()};
+  t.position_covariance << m.cov_xx(), m.cov_xy(), m.cov_xy(), m.cov_yy();
+  t.heading_var = m.heading_var();
+  t.v_mps = m.v_mps();
+  t.w_radps = m.w_radps();
+  t.moving = m.moving();
+  return t;
+}
+
 common::SensorStep FromSharedStep(const msg::SharedStep& m, const std::string& origin, std::uint32_t step_number) {
   const double t0 = m.time_s();
   common::SensorStep step;
@@ -216,6 +246,7 @@ msg::FactorBatch ToMsg(const cooperation::FactorBatch& b) {
     mr.first_step(r.first_step);
     mr.first_pose(dds::ToMsg(r.first_pose));
     for (const auto& step : r.steps) mr.steps().push_back(ToSharedStep(step));
+    for (const auto& t : r.tracks) mr.tracks().push_back(ToSharedTrack(t));
     m.runs().push_back(std::move(mr));
   }
   for (const auto& step : b.opening) m.opening().push_back(ToSharedStep(step));
@@ -227,10 +258,11 @@ cooperation::FactorBatch FromMsg(const msg::FactorBatch& m) {
   b.opened_by_step = m.opened_by_step();
   for (const auto& h : m.holdings()) b.holdings.push_back({h.origin_id(), h.steps(), h.fed_by(), h.fed_at()});
   for (const auto& mr : m.runs()) {
-    cooperation::FactorRun r{mr.origin_id(), mr.first_step(), dds::FromMsg(mr.first_pose()), {}};
+    cooperation::FactorRun r{mr.origin_id(), mr.first_step(), dds::FromMsg(mr.first_pose()), {}, {}};
     for (const auto& h : mr.steps()) {
       r.steps.push_back(FromSharedStep(h, r.origin, r.first_step + static_cast<std::uint32_t>(r.steps.size())));
     }
+    for (const auto& t : mr.tracks()) r.tracks.push_back(FromSharedTrack(t));
     b.runs.push_back(std::move(r));
   }
   for (const auto& h : m.opening()) b.opening.push_back(FromSharedStep(h, b.header.sender, b.opened_by_step));

@@ -158,6 +158,10 @@ struct CooperationOptions {
   int exchange_window_steps = 20;
   int max_batch_steps = 500;
   bool relay_factors = true;  // also pass on other robots' steps (off under DDS-Security)
+  // With share_factors: each step shared carries the origin's estimates of the landmarks it read,
+  // and every agent shows its peers' landmarks so streamed where its own map has none
+  // (cooperation/streamed_landmarks.h).
+  bool stream_landmarks = true;
   // With share_factors among static landmarks: the joint graph over everything held solved
   // again every joint_every_s of run time (0: only at the end), and the own estimate corrected
   // by it (cooperation/joint_tracker.h).

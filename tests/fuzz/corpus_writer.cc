@@ -63,7 +63,7 @@ void WritePeerMessages(const std::string& dir) {
   batch.header = Header();
   batch.opened_by_step = 4;
   batch.holdings = {{"r2", 4, "", 0}};
-  robot_agent::cooperation::FactorRun run{"r2", 4, {0.0, 0.0, 0.0}, {}};
+  robot_agent::cooperation::FactorRun run{"r2", 4, {0.0, 0.0, 0.0}, {}, {}};
   common::SensorStep step;
   step.lidar.stamp = {"r2", 4, 2.6};
   step.lidar.landmarks.push_back({2.6, 4.5, -0.7, 3});

@@ -172,7 +172,7 @@ TEST(AgentMsgConversionTest, SharedStepsArriveAsTheOriginHoldsThem) {
   cooperation::FactorBatch b;
   b.header = {"r3", "r1", 9001, 900.1, 4};
   b.opened_by_step = 9001;
-  cooperation::FactorRun run{"r3", 8999, {0.1, -0.2, 0.3}, {}};
+  cooperation::FactorRun run{"r3", 8999, {0.1, -0.2, 0.3}, {}, {}};
   for (std::uint32_t k = 8999; k <= 9001; ++k) {
     common::SensorStep step;
     const double t = 0.1 * k + 1e-9 * k;
@@ -199,6 +199,37 @@ TEST(AgentMsgConversionTest, SharedStepsArriveAsTheOriginHoldsThem) {
   for (std::size_t i = 0; i < 3; ++i) ExpectBitEqual(back.runs[0].steps[i], run.steps[i]);
   ASSERT_EQ(back.opening.size(), 1U);
   ExpectBitEqual(back.opening[0], run.steps.back());
+}
+
+TEST(AgentMsgConversionTest, TrackEstimatesArriveAsTheOriginHoldsThem) {
+  cooperation::TrackEstimate t;
+  t.label = 12;
+  t.step = 9000;
+  t.mean = {12.345678901, -3.0 / 7.0, 2.9};
+  t.position_covariance << 0.0123456789, -0.001 / 3.0, -0.001 / 3.0, 0.02;
+  t.heading_var = 0.3 / 7.0;
+  t.v_mps = 0.2 / 3.0;
+  t.w_radps = -0.01 / 3.0;
+  t.moving = true;
+  const cooperation::TrackEstimate shared = cooperation::SharedPrecision(t);
+  EXPECT_NE(shared.mean.x(), t.mean.x());  // rounded
+  EXPECT_NEAR(shared.mean.x(), t.mean.x(), 1e-5);
+  cooperation::FactorBatch b;
+  b.header = {"r3", "r1", 9001, 900.1, 4};
+  b.opened_by_step = 9001;
+  b.runs.push_back({"r3", 8999, {}, {common::SensorStep{}, common::SensorStep{}}, {shared}});
+  const auto back = FromMsg(ToMsg(b));
+  ASSERT_EQ(back.runs.size(), 1U);
+  ASSERT_EQ(back.runs[0].tracks.size(), 1U);
+  const cooperation::TrackEstimate& r = back.runs[0].tracks[0];
+  EXPECT_EQ(r.label, 12U);
+  EXPECT_EQ(r.step, 9000U);
+  EXPECT_EQ(r.mean, shared.mean);
+  EXPECT_EQ(r.position_covariance, shared.position_covariance);
+  EXPECT_EQ(r.heading_var, shared.heading_var);
+  EXPECT_EQ(r.v_mps, shared.v_mps);
+  EXPECT_EQ(r.w_radps, shared.w_radps);
+  EXPECT_TRUE(r.moving);
 }
 
 }  // namespace

@@ -23,3 +23,12 @@ mrslam_add_test(joint_transform_test
 mrslam_add_test(factor_exchange_test
   SOURCES factor_exchange_test.cc
   LIBS mrslam_agent_cooperation)
+# Peers' landmarks streamed with their raw measurements: placed through the frame transform, a
+# mover predicted, left out where the robot's own lidar has reached or where the map holds one.
+mrslam_add_test(streamed_landmarks_test
+  SOURCES streamed_landmarks_test.cc
+  LIBS mrslam_agent_cooperation)
+# Where a robot's lidar has reached: marked cells kept as the grid grows to new places.
+mrslam_add_test(reach_grid_test
+  SOURCES reach_grid_test.cc
+  LIBS mrslam_agent_cooperation)

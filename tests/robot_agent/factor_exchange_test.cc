@@ -42,6 +42,20 @@ common::SensorStep Step(const std::string& self, std::uint32_t k, const std::vec
   return s;
 }
 
+// Robot `self`'s estimate at step k of the landmark it labels 7 (its position drifting with k so
+// that each step's estimate differs).
+TrackEstimate Track(std::uint32_t k, bool moving = false) {
+  TrackEstimate t;
+  t.label = 7;
+  t.step = k;
+  t.mean = {2.0 + 0.01 * k, 0.3, 0.1};
+  t.position_covariance = 0.01 * Eigen::Matrix2d::Identity();
+  t.heading_var = 0.2;
+  t.v_mps = moving ? 0.4 : 0.0;
+  t.moving = moving;
+  return t;
+}
+
 // Three agents stepping together; deliver() hands each batch of a step to its recipient unless
 // the filter drops it.
 class ThreeAgents {
@@ -57,7 +71,7 @@ class ThreeAgents {
                                bool (*drop)(const FactorBatch&) = nullptr) {
     std::vector<FactorBatch> sent;
     for (auto& [id, agent] : agents_) {
-      agent.RecordOwn(Step(id, k, sees[id]));
+      agent.RecordOwn(Step(id, k, sees[id]), {Track(k)});
       for (auto& b : agent.Outgoing(k, 0.1 * k)) sent.push_back(std::move(b));
     }
     for (const auto& b : sent) {
@@ -126,6 +140,31 @@ TEST(FactorExchange, RelaysToARobotThatNeverMetTheOrigin) {
   EXPECT_EQ(t["b"].Held("a"), kMet + kWindow);
   EXPECT_EQ(t["c"].Held("a"), kMet + kWindow);  // all of it, through b
   EXPECT_EQ(t["a"].Held("c"), 0U);
+}
+
+TEST(FactorExchange, TrackEstimatesTravelWithTheirStepsAndAreRelayed) {
+  ThreeAgents t;
+  for (std::uint32_t k = 1; k <= kMet; ++k) t.Run(k, Mutual("a", "b"));
+  for (std::uint32_t k = kMet + 1; k <= 35; ++k) {
+    t.Run(k, k >= 30 ? Mutual("b", "c") : std::map<std::string, std::vector<std::string>>{});
+  }
+  // A static landmark's estimate is renewed every kTrackRefreshSteps steps: a holds its newest
+  // (of step 31); b and c the newest of a step they hold (a's steps 1..15: that of step 11).
+  EXPECT_EQ(t["a"].logs().at("a").tracks.at(7).step, 31U);
+  for (const std::string id : {"b", "c"}) {
+    const auto& tracks = t[id].logs().at("a").tracks;
+    ASSERT_EQ(tracks.size(), 1U) << id;
+    EXPECT_EQ(tracks.at(7).step, 11U) << id;
+    EXPECT_EQ(tracks.at(7).mean, SharedPrecision(Track(11)).mean) << id;
+  }
+}
+
+TEST(FactorExchange, AMoversEstimateIsRenewedAtEveryStepThatReadsIt) {
+  FactorExchange a(Options("a"));
+  for (std::uint32_t k = 1; k <= 5; ++k) a.RecordOwn(Step("a", k), {Track(k, true)});
+  EXPECT_EQ(a.logs().at("a").tracks.at(7).step, 5U);
+  a.RecordOwn(Step("a", 6), {Track(5, true)});  // not of this step: not taken
+  EXPECT_EQ(a.logs().at("a").tracks.at(7).step, 5U);
 }
 
 TEST(FactorExchange, AtAFirstContactOnlyWhatThePeerLacksTravels) {
@@ -201,7 +240,7 @@ class RejectedBatch : public ::testing::Test {
   // of steps 5 to 7, then its steps.
   void SetUp() override {
     for (std::uint32_t k = 1; k <= 8; ++k) {
-      b_.RecordOwn(Step("b", k, k == 5 ? std::vector<std::string>{"a"} : std::vector<std::string>{}));
+      b_.RecordOwn(Step("b", k, k == 5 ? std::vector<std::string>{"a"} : std::vector<std::string>{}), {Track(k)});
       const auto out = b_.Outgoing(k, 0.1 * k);
       ASSERT_EQ(out.size(), k < 5 ? 0U : 1U) << "step " << k;
       if (k < 8) continue;
@@ -242,6 +281,7 @@ TEST_F(RejectedBatch, OneWhoseOpeningStepIsMissingIsAGapNotARejection) {
   FactorBatch later = good_;
   later.runs[0].first_step = 6;
   later.runs[0].steps = {Step("b", 6)};
+  later.runs[0].tracks.clear();  // that of step 1, not carried
   later.header.step = 6;
   FactorExchange a(Options("a"));
   EXPECT_TRUE(a.Receive(later));
@@ -283,13 +323,31 @@ TEST_F(RejectedBatch, Malformed) {
   ExpectRejected(bad);
 }
 
+TEST_F(RejectedBatch, MalformedTrackEstimates) {
+  ASSERT_FALSE(good_.runs[0].tracks.empty());
+  const auto with = [&](auto change) {
+    FactorBatch bad = good_;
+    change(&bad.runs[0].tracks[0]);
+    return bad;
+  };
+  ExpectRejected(with([](TrackEstimate* t) { t->mean.x() = std::numeric_limits<double>::quiet_NaN(); }));
+  ExpectRejected(with([](TrackEstimate* t) { t->label = 0; }));
+  ExpectRejected(with([](TrackEstimate* t) { t->step = 9; }));  // not a step of the run
+  ExpectRejected(with([](TrackEstimate* t) { t->position_covariance(0, 0) = -1.0; }));
+  ExpectRejected(with([](TrackEstimate* t) { t->heading_var = -0.1; }));
+  ExpectRejected(with([](TrackEstimate* t) { t->w_radps = std::numeric_limits<double>::infinity(); }));
+  FactorBatch many = good_;
+  many.runs[0].tracks.resize(257, many.runs[0].tracks[0]);
+  ExpectRejected(many);
+}
+
 TEST_F(RejectedBatch, TheRecipientsOwnStepsOrRelayedOnesWhenRelayingIsOff) {
   FactorBatch own = good_;
-  FactorRun mine{"a", 1, {}, {Step("a", 1)}};
+  FactorRun mine{"a", 1, {}, {Step("a", 1)}, {}};
   own.runs.push_back(mine);
   ExpectRejected(own);
   FactorBatch relayed = good_;
-  relayed.runs.push_back({"c", 1, {}, {Step("c", 1)}});
+  relayed.runs.push_back({"c", 1, {}, {Step("c", 1)}, {}});
   FactorExchange a(Options("a"));
   EXPECT_TRUE(a.Receive(relayed));
   EXPECT_EQ(a.Held("c"), 1U);
