@@ -71,6 +71,13 @@ void WritePeerMessages(const std::string& dir) {
   step.odometry.stamp = step.lidar.stamp;
   step.odometry.segments.push_back({2.0, 0.6, 1.0, 0.2});
   run.steps.push_back(step);
+  robot_agent::cooperation::TrackEstimate track;
+  track.label = 3;
+  track.step = 4;
+  track.mean = Eigen::Vector3d(4.0, -2.0, 0.5);
+  track.position_covariance = 0.02 * Eigen::Matrix2d::Identity();
+  track.heading_var = 0.1;
+  run.tracks.push_back(track);
   batch.runs.push_back(run);
   Write<msg::FactorBatchPubSubType>(dir + "/factors", 3, robot_agent::ToMsg(batch));
 }
