@@ -568,11 +568,11 @@ struct AgentNode::Impl {
     cooperation::PeerOutbox outbox = cooperation.AfterStep(step, estimate);
     outbox.moved = cooperation.MovedNotices(filter->TakeMovedLandmarks(), k, time_s);
     if (cooperation::JointTracker::Enabled(agent)) TrackJoint(k, estimate);
+    filters::FilterEstimate published = joint_tracker.Corrected(estimate);
+    cooperation.CompleteMap(&published);
     const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s);
     const auto sent = Send(std::move(outbox));
     LogRendezvous(k, *last);
-    filters::FilterEstimate published = joint_tracker.Corrected(estimate);
-    cooperation.CompleteMap(&published);
     msg::Estimate m = ToMsg(published, agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
     m.frames_known(cooperation.frames_known());
