@@ -24,6 +24,21 @@ std::uint32_t Label(const common::LandmarkDetection& d, std::uint32_t track, boo
   return track;
 }
 
+// Whether a landmark reading of step s carries label.
+bool NamesLabel(const common::SensorStep& s, std::uint32_t label) {
+  return std::any_of(s.lidar.landmarks.begin(), s.lidar.landmarks.end(),
+                     [&](const common::LandmarkDetection& d) { return d.landmark_id == static_cast<int>(label); });
+}
+
+// Keeps t as its label's newest estimate in tracks, at most kMaxTracksHeld labels (the label
+// whose estimate is oldest let go).
+void Keep(const TrackEstimate& t, std::map<std::uint32_t, TrackEstimate>* tracks) {
+  (*tracks)[t.label] = t;
+  if (tracks->size() <= kMaxTracksHeld) return;
+  tracks->erase(std::min_element(tracks->begin(), tracks->end(),
+                                 [](const auto& a, const auto& b) { return a.second.step < b.second.step; }));
+}
+
 // A value rounded to single precision.
 double Single(double x) { return static_cast<double>(static_cast<float>(x)); }
 
@@ -57,7 +72,9 @@ std::vector<TrackEstimate> TrackEstimates(const common::SensorStep& step, const 
   for (std::size_t i = 0; i < step.lidar.landmarks.size(); ++i) {
     const std::uint32_t track = estimate.detection_tracks[i];
     const std::uint32_t label = Label(step.lidar.landmarks[i], track, by_identity);
-    if (track == 0 || label == 0 || !labels.insert(label).second) continue;
+    // By identity, a detection without one names no landmark every robot knows.
+    const bool unnamed = by_identity && step.lidar.landmarks[i].landmark_id < 0;
+    if (track == 0 || label == 0 || unnamed || !labels.insert(label).second) continue;
     const auto l = std::find_if(estimate.landmarks.begin(), estimate.landmarks.end(),
                                 [&](const filters::MapLandmark& m) { return m.track_id == track; });
     if (l == estimate.landmarks.end() || l->tentative) continue;
@@ -100,8 +117,12 @@ TrackEstimate SharedPrecision(TrackEstimate t) {
 }
 
 bool TrackEstimateValid(const TrackEstimate& t, std::uint32_t first, std::uint32_t last) {
-  return t.label >= 1 && t.step >= first && t.step <= last && t.mean.allFinite() && std::isfinite(t.v_mps) &&
-         std::isfinite(t.w_radps) && std::isfinite(t.heading_var) && t.heading_var >= 0.0 &&
+  const auto within = [](double x, double bound) { return std::isfinite(x) && std::abs(x) <= bound; };
+  return t.label >= 1 && t.label <= kMaxTrackLabel && t.step >= first && t.step <= last &&
+         within(t.mean.x(), kMaxTrackCoordinateM) && within(t.mean.y(), kMaxTrackCoordinateM) &&
+         std::isfinite(t.mean.z()) && within(t.v_mps, kMaxTrackRate) && within(t.w_radps, kMaxTrackRate) &&
+         within(t.heading_var, kMaxTrackVariance) && t.heading_var >= 0.0 &&
+         t.position_covariance.cwiseAbs().maxCoeff() <= kMaxTrackVariance &&
          common::IsSymmetricPositiveDefinite<2>(t.position_covariance);
 }
 
@@ -160,10 +181,9 @@ void FactorExchange::RecordOwn(const common::SensorStep& labelled, const std::ve
   own.steps.push_back(SharedPrecision(labelled));
   for (const TrackEstimate& t : tracks) {
     const auto held = own.tracks.find(t.label);
-    if (t.step != k || (held != own.tracks.end() && !t.moving && t.step < held->second.step + kTrackRefreshSteps)) {
-      continue;
-    }
-    own.tracks[t.label] = SharedPrecision(t);
+    if (held != own.tracks.end() && !t.moving && t.step < held->second.step + kTrackRefreshSteps) continue;
+    const TrackEstimate shared = SharedPrecision(t);
+    if (TrackEstimateValid(shared, k, k) && NamesLabel(own.steps.back(), t.label)) Keep(shared, &own.tracks);
   }
   if (static_cast<int>(k) < options_.rendezvous.enable_from_step) return;
   for (const auto& d : labelled.lidar.robots) {
@@ -221,6 +241,11 @@ void FactorExchange::AddRuns(const std::string& peer, std::uint32_t k, FactorBat
     run.steps.assign(log.steps.begin() + from, log.steps.begin() + to);
     for (const auto& [label, t] : log.tracks) {
       if (t.step > from && t.step <= to) run.tracks.push_back(t);
+    }
+    if (run.tracks.size() > kMaxItems) {  // the newest go
+      std::stable_sort(run.tracks.begin(), run.tracks.end(),
+                       [](const auto& a, const auto& b) { return a.step > b.step; });
+      run.tracks.resize(kMaxItems);
     }
     budget -= run.steps.size();
     steps_sent_ += run.steps.size();
@@ -282,13 +307,23 @@ bool FactorExchange::BatchValid(const FactorBatch& b) const {
     for (std::size_t i = 0; i < run.steps.size(); ++i) {
       if (!SharedStepValid(run.steps[i], run.first_step + static_cast<std::uint32_t>(i))) return false;
     }
-    const auto last = run.first_step + static_cast<std::uint32_t>(run.steps.size()) - 1;
-    if (run.tracks.size() > kMaxItems || (!run.tracks.empty() && run.steps.empty())) return false;
-    for (const auto& t : run.tracks) {
-      if (!TrackEstimateValid(t, run.first_step, last)) return false;
-    }
+    if (!TracksValid(run)) return false;
   }
   return b.opening.size() <= 1 && (b.opening.empty() || SharedStepValid(b.opening[0], b.opened_by_step));
+}
+
+bool FactorExchange::TracksValid(const FactorRun& run) {
+  if (run.tracks.empty()) return true;
+  if (run.tracks.size() > kMaxItems || run.steps.empty()) return false;
+  const auto last = run.first_step + static_cast<std::uint32_t>(run.steps.size()) - 1;
+  std::set<std::uint32_t> labels;
+  for (const auto& t : run.tracks) {
+    if (!TrackEstimateValid(t, run.first_step, last) || !labels.insert(t.label).second ||
+        !NamesLabel(run.steps[t.step - run.first_step], t.label)) {
+      return false;
+    }
+  }
+  return true;
 }
 
 const common::SensorStep* FactorExchange::Opening(const FactorBatch& b) const {
@@ -317,7 +352,7 @@ void FactorExchange::Apply(const FactorRun& run, const PeerHeader& from) {
   log.steps.insert(log.steps.end(), run.steps.begin() + static_cast<std::ptrdiff_t>(skip), run.steps.end());
   for (const TrackEstimate& t : run.tracks) {
     const auto held_track = log.tracks.find(t.label);
-    if (t.step > held && (held_track == log.tracks.end() || held_track->second.step < t.step)) log.tracks[t.label] = t;
+    if (t.step > held && (held_track == log.tracks.end() || held_track->second.step < t.step)) Keep(t, &log.tracks);
   }
   log.fed_by = from.sender;
   log.fed_at = from.step;

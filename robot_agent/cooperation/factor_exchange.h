@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -63,8 +64,17 @@ TrackEstimate SharedPrecision(TrackEstimate t);
 // a track label on every landmark detection, a seen robot named on every robot detection, no
 // IMU, at most 256 items per kind.
 bool SharedStepValid(const common::SensorStep& s, std::uint32_t step);
-// Whether t is a well-formed estimate of a run's steps first..last: a label from 1, a step in the
-// run, finite values, a positive definite position covariance, a non-negative heading variance.
+// Bounds of a landmark estimate shared: its label, its position's coordinates, its covariances'
+// entries, its speed and turn rate; and how many labels a log keeps (the newest).
+constexpr std::uint32_t kMaxTrackLabel = (1U << 20) - 1;
+constexpr double kMaxTrackCoordinateM = 1e6;
+constexpr double kMaxTrackVariance = 1e12;
+constexpr double kMaxTrackRate = 1e3;
+constexpr std::size_t kMaxTracksHeld = 1024;
+
+// Whether t is a well-formed estimate of a run's steps first..last: a label in 1..kMaxTrackLabel,
+// a step in the run, finite values within the bounds above, a positive definite position
+// covariance, a non-negative heading variance.
 bool TrackEstimateValid(const TrackEstimate& t, std::uint32_t first, std::uint32_t last);
 
 // An agent's side of the exchange. Pure; not thread-safe.
@@ -102,7 +112,8 @@ class FactorExchange {
 
   // The own step k (LabelledStep) goes into the own log, in SharedPrecision, with the estimates
   // of the landmarks it read (TrackEstimates; a label's estimate is renewed when it is a mover's
-  // or kTrackRefreshSteps old); its robot detections open the window to those peers. A step that
+  // or kTrackRefreshSteps old; one that is not TrackEstimateValid in its shared precision is left
+  // out); its robot detections open the window to those peers. A step that
   // does not follow the last one ends the own log's growth (a gap cannot be shared).
   void RecordOwn(const common::SensorStep& labelled, const std::vector<TrackEstimate>& tracks = {});
   // The batches to send after step k (header: sender, recipient, k, time_s; sequence 0).
@@ -131,6 +142,9 @@ class FactorExchange {
 
  private:
   bool BatchValid(const FactorBatch& b) const;
+  // A run's estimates: at most kMaxItems, each TrackEstimateValid, of a label a reading of its
+  // step names, no label twice.
+  static bool TracksValid(const FactorRun& run);
   // The sender's step opened_by_step: held, in the batch's runs or its opening; nullptr if none.
   const common::SensorStep* Opening(const FactorBatch& b) const;
   void Apply(const FactorRun& run, const PeerHeader& from);

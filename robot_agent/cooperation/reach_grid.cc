@@ -7,7 +7,10 @@ namespace mrslam::robot_agent::cooperation {
 
 ReachGrid::ReachGrid(double cell_m) : cell_m_(cell_m) {}
 
-std::int32_t ReachGrid::Index(double x) const { return static_cast<std::int32_t>(std::floor(x / cell_m_)); }
+std::int32_t ReachGrid::Index(double x) const {
+  constexpr double kLimit = 1 << 30;  // far beyond any grid, within int32
+  return static_cast<std::int32_t>(std::clamp(std::floor(x / cell_m_), -kLimit, kLimit));
+}
 
 Eigen::Vector2d ReachGrid::Centre(std::int32_t i, std::int32_t j) const {
   return {(i + 0.5) * cell_m_, (j + 0.5) * cell_m_};
@@ -19,10 +22,15 @@ bool ReachGrid::Marked(std::int32_t i, std::int32_t j) const {
                 static_cast<std::size_t>(i - i0_)] != 0;
 }
 
-void ReachGrid::Cover(std::int32_t i_lo, std::int32_t j_lo, std::int32_t i_hi, std::int32_t j_hi) {
-  if (ni_ > 0 && i_lo >= i0_ && j_lo >= j0_ && i_hi < i0_ + ni_ && j_hi < j0_ + nj_) return;
+bool ReachGrid::Cover(std::int32_t i_lo, std::int32_t j_lo, std::int32_t i_hi, std::int32_t j_hi) {
+  if (ni_ > 0 && i_lo >= i0_ && j_lo >= j0_ && i_hi < i0_ + ni_ && j_hi < j0_ + nj_) return true;
+  const auto span = [](std::int64_t lo, std::int64_t hi) { return hi - lo + 1; };
+  const std::int64_t need_i = ni_ == 0 ? span(i_lo, i_hi) : span(std::min(i_lo, i0_), std::max(i_hi, i0_ + ni_ - 1));
+  const std::int64_t need_j = nj_ == 0 ? span(j_lo, j_hi) : span(std::min(j_lo, j0_), std::max(j_hi, j0_ + nj_ - 1));
+  if (need_i > kMaxCellsPerAxis || need_j > kMaxCellsPerAxis) return false;
   // Grown with slack on the sides it grows, so that a robot moving on is not copied every step.
-  const std::int32_t slack = std::max<std::int32_t>(8, std::max(ni_, nj_) / 2);
+  const auto room = static_cast<std::int32_t>((kMaxCellsPerAxis - std::max(need_i, need_j)) / 2);
+  const std::int32_t slack = std::min(std::max<std::int32_t>(8, std::max(ni_, nj_) / 2), room);
   const std::int32_t new_i0 = ni_ == 0 ? i_lo - slack : std::min(i0_, i_lo - (i_lo < i0_ ? slack : 0));
   const std::int32_t new_j0 = nj_ == 0 ? j_lo - slack : std::min(j0_, j_lo - (j_lo < j0_ ? slack : 0));
   const std::int32_t new_i1 = ni_ == 0 ? i_hi + slack : std::max(i0_ + ni_ - 1, i_hi + (i_hi >= i0_ + ni_ ? slack : 0));
@@ -40,13 +48,17 @@ void ReachGrid::Cover(std::int32_t i_lo, std::int32_t j_lo, std::int32_t i_hi, s
   j0_ = new_j0;
   ni_ = new_ni;
   nj_ = new_nj;
+  return true;
 }
 
 void ReachGrid::Mark(const common::Pose2& pose, double range_m, double half_fov_rad, double margin_m) {
   const double reach_m = range_m + margin_m;
+  if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.heading) || !std::isfinite(reach_m)) {
+    return;
+  }
   const std::int32_t i_lo = Index(pose.x - reach_m), i_hi = Index(pose.x + reach_m);
   const std::int32_t j_lo = Index(pose.y - reach_m), j_hi = Index(pose.y + reach_m);
-  Cover(i_lo, j_lo, i_hi, j_hi);
+  if (!Cover(i_lo, j_lo, i_hi, j_hi)) return;
   for (std::int32_t j = j_lo; j <= j_hi; ++j) {
     for (std::int32_t i = i_lo; i <= i_hi; ++i) {
       const common::RangeBearing h = common::MeasureRangeBearing(pose, Centre(i, j));
@@ -59,6 +71,7 @@ void ReachGrid::Mark(const common::Pose2& pose, double range_m, double half_fov_
 }
 
 bool ReachGrid::AnyWithin(const Eigen::Vector2d& p, double radius_m) const {
+  if (ni_ == 0 || !p.allFinite() || !std::isfinite(radius_m)) return false;
   const std::int32_t i_lo = std::max(i0_, Index(p.x() - radius_m));
   const std::int32_t i_hi = std::min(i0_ + ni_ - 1, Index(p.x() + radius_m));
   const std::int32_t j_lo = std::max(j0_, Index(p.y() - radius_m));

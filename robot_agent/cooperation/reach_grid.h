@@ -13,9 +13,12 @@ namespace mrslam::robot_agent::cooperation {
 
 // The places a robot's lidar has reached: square cells of side cell_m in its own frame, marked
 // on a dense grid that grows to cover what is marked (its size follows the area explored, not
-// the run's length).
+// the run's length), at most kMaxCellsPerAxis cells along each axis: a view that would grow it
+// beyond (or from a pose not finite) is not marked.
 class ReachGrid {
  public:
+  static constexpr std::int32_t kMaxCellsPerAxis = 4096;
+
   explicit ReachGrid(double cell_m);
 
   // Marks every cell whose centre lies within range_m of pose and within half_fov_rad of its
@@ -29,8 +32,9 @@ class ReachGrid {
 
  private:
   std::int32_t Index(double x) const;
-  // Grows the grid to hold cells [i_lo, i_hi] x [j_lo, j_hi].
-  void Cover(std::int32_t i_lo, std::int32_t j_lo, std::int32_t i_hi, std::int32_t j_hi);
+  // Grows the grid to hold cells [i_lo, i_hi] x [j_lo, j_hi]; false (unchanged) when it would
+  // exceed kMaxCellsPerAxis.
+  bool Cover(std::int32_t i_lo, std::int32_t j_lo, std::int32_t i_hi, std::int32_t j_hi);
   bool Marked(std::int32_t i, std::int32_t j) const;
   Eigen::Vector2d Centre(std::int32_t i, std::int32_t j) const;
 

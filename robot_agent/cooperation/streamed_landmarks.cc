@@ -34,6 +34,7 @@ StreamedLandmarks::StreamedLandmarks(const AgentOptions& options)
       reached_(kCellM) {}
 
 void StreamedLandmarks::Observe(const filters::FilterEstimate& estimate) {
+  if (!estimate.covariance.allFinite()) return;
   const auto& lidar = options_.sensors.lidar;
   // Any part of a cell within reach of where the robot may have been.
   const double pose_sds = std::min(kReachSds * LargestSd(estimate.covariance.topLeftCorner<2, 2>()), lidar.max_range_m);
@@ -49,7 +50,8 @@ bool StreamedLandmarks::Reached(const filters::MapLandmark& l) const {
 std::optional<filters::MapLandmark> StreamedLandmarks::Placement(const std::string& origin, const FactorLog& log,
                                                                  const TrackEstimate& t, const FrameTransform& frame,
                                                                  double time_s) const {
-  if ((t.moving && !movers_shown_) || t.label > kMaxLabel || t.step == 0 || t.step > log.Held()) return std::nullopt;
+  if ((t.moving && !movers_shown_) || t.label > kMaxTrackLabel || t.step == 0 || t.step > log.Held())
+    return std::nullopt;
   const auto origin_index = static_cast<std::uint32_t>(options_.TeamIndex(origin));
   filters::MapLandmark l;
   l.track_id = kFirstTrack | (origin_index << 20) | t.label;

@@ -42,15 +42,16 @@ namespace mrslam::robot_agent::cooperation {
 // uncertainty is common to all of an origin's landmarks).
 class StreamedLandmarks {
  public:
-  // The track ids of the landmarks shown: kFirstTrack | (origin's team index << 20) | label.
+  // The track ids of the landmarks shown: kFirstTrack | (origin's team index << 20) | label
+  // (labels at most kMaxTrackLabel, 20 bits).
   static constexpr std::uint32_t kFirstTrack = 0xC0000000U;
-  static constexpr std::uint32_t kMaxLabel = (1U << 20) - 1;
   static constexpr double kCellM = 0.5;
   static constexpr double kReachSds = 3.0;
 
   explicit StreamedLandmarks(const AgentOptions& options);
 
-  // Marks where the lidar reaches from the pose of estimate.
+  // Marks where the lidar reaches from the pose of estimate (nothing for a pose or covariance
+  // not finite).
   void Observe(const filters::FilterEstimate& estimate);
   // Appends to the map of estimate the landmarks placed from logs through transforms that are
   // shown (the rules above).

@@ -336,9 +336,56 @@ TEST_F(RejectedBatch, MalformedTrackEstimates) {
   ExpectRejected(with([](TrackEstimate* t) { t->position_covariance(0, 0) = -1.0; }));
   ExpectRejected(with([](TrackEstimate* t) { t->heading_var = -0.1; }));
   ExpectRejected(with([](TrackEstimate* t) { t->w_radps = std::numeric_limits<double>::infinity(); }));
+  ExpectRejected(with([](TrackEstimate* t) { t->mean.y() = 2e6; }));  // beyond kMaxTrackCoordinateM
+  ExpectRejected(with([](TrackEstimate* t) { t->label = kMaxTrackLabel + 1; }));
+  ExpectRejected(with([](TrackEstimate* t) { t->label = 8; }));  // no reading of its step names it
+  FactorBatch twice = good_;
+  twice.runs[0].tracks.push_back(twice.runs[0].tracks[0]);
+  ExpectRejected(twice);
   FactorBatch many = good_;
   many.runs[0].tracks.resize(257, many.runs[0].tracks[0]);
   ExpectRejected(many);
+}
+
+TEST(FactorExchange, OnlyWellFormedEstimatesAreSharedAndARunCarriesAtMost256) {
+  const auto long_runs = [](const std::string& id) {
+    AgentOptions o = Options(id);
+    o.cooperation.max_batch_steps = 500;
+    return o;
+  };
+  FactorExchange a(long_runs("a"));
+  TrackEstimate singular = Track(1);
+  singular.position_covariance.setZero();
+  a.RecordOwn(Step("a", 1), {singular});
+  EXPECT_TRUE(a.logs().at("a").tracks.empty());
+  TrackEstimate unnamed = Track(2);
+  unnamed.label = 8;  // the step's reading is labelled 7
+  a.RecordOwn(Step("a", 2), {unnamed});
+  EXPECT_TRUE(a.logs().at("a").tracks.empty());
+  // 300 steps, each reading a landmark of its own: one catch-up run to b carries the newest 256.
+  for (std::uint32_t k = 3; k <= 300; ++k) {
+    common::SensorStep s = Step("a", k, k == 300 ? std::vector<std::string>{"b"} : std::vector<std::string>{});
+    s.lidar.landmarks[0].landmark_id = static_cast<int>(k);
+    TrackEstimate t = Track(k);
+    t.label = k;
+    a.RecordOwn(s, {t});
+  }
+  EXPECT_EQ(a.logs().at("a").tracks.size(), 298U);
+  for (std::uint32_t k = 300; k <= 303; ++k) {
+    if (k > 300) a.RecordOwn(Step("a", k));
+    for (const auto& batch : a.Outgoing(k, 0.1 * k)) {
+      for (const auto& run : batch.runs) {
+        if (run.steps.empty()) continue;
+        EXPECT_EQ(run.tracks.size(), 256U);
+        FactorExchange b(long_runs("b"));
+        EXPECT_TRUE(b.Receive(batch));
+        EXPECT_EQ(b.logs().at("a").tracks.size(), 256U);
+        EXPECT_EQ(b.logs().at("a").tracks.begin()->first, 45U);  // the oldest 42 left for later
+        return;
+      }
+    }
+  }
+  ADD_FAILURE() << "a sent no steps to b";
 }
 
 TEST_F(RejectedBatch, TheRecipientsOwnStepsOrRelayedOnesWhenRelayingIsOff) {

@@ -49,5 +49,22 @@ TEST(ReachGrid, KeepsItsMarksAsItGrowsAnywhere) {
   EXPECT_EQ(back.Bytes(), g.Bytes());
 }
 
+TEST(ReachGrid, NeverGrowsBeyondItsBoundNorMarksFromAPoseNotFinite) {
+  ReachGrid g(0.5);
+  g.Mark({0.0, 0.0, 0.0}, 6.0, kPi, 0.0);
+  const std::size_t bytes = g.Bytes();
+  g.Mark({1e5, 0.0, 0.0}, 6.0, kPi, 0.0);  // 200,000 cells away: beyond kMaxCellsPerAxis
+  g.Mark({std::nan(""), 0.0, 0.0}, 6.0, kPi, 0.0);
+  g.Mark({1e300, -1e300, 0.0}, 6.0, kPi, 0.0);
+  EXPECT_EQ(g.Bytes(), bytes);
+  EXPECT_FALSE(g.AnyWithin({1e5, 0.0}, 3.0));
+  EXPECT_FALSE(g.AnyWithin({std::nan(""), 0.0}, 3.0));
+  EXPECT_TRUE(g.AnyWithin({2.0, 0.0}, 0.5));
+  g.Mark({900.0, 900.0, 0.0}, 6.0, kPi, 0.0);  // 1,800 cells away: within the bound
+  EXPECT_TRUE(g.AnyWithin({902.0, 900.0}, 0.5));
+  EXPECT_TRUE(g.AnyWithin({2.0, 0.0}, 0.5));
+  EXPECT_LE(g.Bytes(), static_cast<std::size_t>(ReachGrid::kMaxCellsPerAxis) * ReachGrid::kMaxCellsPerAxis);
+}
+
 }  // namespace
 }  // namespace mrslam::robot_agent::cooperation
