@@ -23,6 +23,9 @@ bool SameOrNear(const filters::MatchCandidate& a, const filters::MatchCandidate&
   return (a.position - b.position).norm() < near_m;
 }
 
+// Half a cell's diagonal: any part of a cell lies within it of the cell's centre.
+constexpr double kCellReachM = 0.5 * 1.4142135623730951 * StreamedLandmarks::kCellM;
+
 }  // namespace
 
 StreamedLandmarks::StreamedLandmarks(const AgentOptions& options)
@@ -38,20 +41,20 @@ void StreamedLandmarks::Observe(const filters::FilterEstimate& estimate) {
   const auto& lidar = options_.sensors.lidar;
   // Any part of a cell within reach of where the robot may have been.
   const double pose_sds = std::min(kReachSds * LargestSd(estimate.covariance.topLeftCorner<2, 2>()), lidar.max_range_m);
-  reached_.Mark(estimate.pose, lidar.max_range_m, 0.5 * lidar.fov_rad, 0.5 * std::sqrt(2.0) * kCellM + pose_sds);
+  reached_.Mark(estimate.pose, lidar.max_range_m, 0.5 * lidar.fov_rad, kCellReachM + pose_sds);
 }
 
 bool StreamedLandmarks::Reached(const filters::MapLandmark& l) const {
   const double sds = kReachSds * LargestSd(l.covariance.topLeftCorner<2, 2>());
   if (sds > options_.sensors.lidar.max_range_m) return true;
-  return reached_.AnyWithin(l.mean.head<2>(), sds + 0.5 * std::sqrt(2.0) * kCellM);
+  return reached_.AnyWithin(l.mean.head<2>(), sds + kCellReachM);
 }
 
 std::optional<filters::MapLandmark> StreamedLandmarks::Placement(const std::string& origin, const FactorLog& log,
                                                                  const TrackEstimate& t, const FrameTransform& frame,
                                                                  double time_s) const {
-  if ((t.moving && !movers_shown_) || t.label > kMaxTrackLabel || t.step == 0 || t.step > log.Held())
-    return std::nullopt;
+  // (Labels are checked where an estimate is recorded or received; the step indexes the log.)
+  if ((t.moving && !movers_shown_) || t.step == 0 || t.step > log.Held()) return std::nullopt;
   const auto origin_index = static_cast<std::uint32_t>(options_.TeamIndex(origin));
   filters::MapLandmark l;
   l.track_id = kFirstTrack | (origin_index << 20) | t.label;
