@@ -260,6 +260,7 @@ std::optional<FactorBatch> FactorExchange::BatchFor(const std::string& peer, std
   batch.header = {self_, peer, k, time_s, 0};
   batch.opened_by_step = detected_at_.at(peer);
   for (const auto& [origin, log] : logs_) batch.holdings.push_back({origin, log.Held(), log.fed_by, log.fed_at});
+  if (options_.cooperation.relay_factors) AddHeard(peer, k, &batch);
   const auto heard = holdings_step_.find(peer);
   const bool news = heard != holdings_step_.end() && heard->second >= session_start_[peer];
   const bool greeting = !news && k <= session_start_[peer] + kAckLagSteps;
@@ -273,6 +274,19 @@ std::optional<FactorBatch> FactorExchange::BatchFor(const std::string& peer, std
   }
   last_batch_[peer] = k;
   return batch;
+}
+
+void FactorExchange::AddHeard(const std::string& peer, std::uint32_t k, FactorBatch* batch) {
+  auto& passed = heard_passed_[peer];
+  for (const auto& [robot, step] : holdings_step_) {
+    if (robot == peer || robot == self_) continue;
+    const auto before = passed.find(robot);
+    if (before != passed.end() && (step <= before->second.step || k < before->second.at + kHeardSteps)) continue;
+    std::vector<FactorHolding> holdings;
+    for (const auto& [origin, h] : peer_holdings_.at(robot)) holdings.push_back({origin, h.steps, h.fed_by, h.fed_at});
+    batch->heard.push_back({robot, step, std::move(holdings)});
+    passed[robot] = {step, k};
+  }
 }
 
 std::vector<FactorBatch> FactorExchange::Outgoing(std::uint32_t k, double time_s) {
@@ -290,13 +304,8 @@ bool FactorExchange::BatchValid(const FactorBatch& b) const {
       b.header.step - b.opened_by_step > static_cast<std::uint32_t>(co.exchange_window_steps)) {
     return false;
   }
-  if (b.holdings.size() > options_.team.size() || b.runs.size() > options_.team.size()) return false;
+  if (b.runs.size() > options_.team.size() || !HoldingsValid(b.holdings) || !HeardValid(b)) return false;
   std::set<std::string> seen;
-  for (const auto& h : b.holdings) {
-    if (options_.TeamIndex(h.origin) < 0 || !seen.insert(h.origin).second) return false;
-    if (!h.fed_by.empty() && options_.TeamIndex(h.fed_by) < 0) return false;
-  }
-  seen.clear();
   std::size_t steps = 0;
   for (const auto& run : b.runs) {
     if (options_.TeamIndex(run.origin) < 0 || run.origin == self_ || !seen.insert(run.origin).second) return false;
@@ -310,6 +319,34 @@ bool FactorExchange::BatchValid(const FactorBatch& b) const {
     if (!TracksValid(run)) return false;
   }
   return b.opening.size() <= 1 && (b.opening.empty() || SharedStepValid(b.opening[0], b.opened_by_step));
+}
+
+bool FactorExchange::HoldingsValid(const std::vector<FactorHolding>& holdings) const {
+  if (holdings.size() > options_.team.size()) return false;
+  std::set<std::string> seen;
+  return std::all_of(holdings.begin(), holdings.end(), [&](const FactorHolding& h) {
+    return options_.TeamIndex(h.origin) >= 0 && seen.insert(h.origin).second &&
+           (h.fed_by.empty() || options_.TeamIndex(h.fed_by) >= 0);
+  });
+}
+
+bool FactorExchange::HeardValid(const FactorBatch& b) const {
+  if (b.heard.empty()) return true;
+  if (!options_.cooperation.relay_factors || b.heard.size() > options_.team.size()) return false;
+  std::set<std::string> seen;
+  return std::all_of(b.heard.begin(), b.heard.end(), [&](const HeardHoldings& h) {
+    return options_.TeamIndex(h.robot) >= 0 && h.robot != b.header.sender && seen.insert(h.robot).second &&
+           h.step > 0 && h.step <= b.header.step && HoldingsValid(h.holdings);
+  });
+}
+
+void FactorExchange::Hear(const std::string& robot, std::uint32_t step, const std::vector<FactorHolding>& holdings) {
+  const auto heard = holdings_step_.find(robot);
+  if (robot == self_ || (heard != holdings_step_.end() && step < heard->second)) return;
+  holdings_step_[robot] = step;
+  auto& held = peer_holdings_[robot];
+  held.clear();
+  for (const auto& h : holdings) held[h.origin] = h;
 }
 
 bool FactorExchange::TracksValid(const FactorRun& run) {
@@ -369,12 +406,10 @@ bool FactorExchange::Receive(const FactorBatch& batch) {
   const auto& seen = opening->lidar.robots;
   if (std::none_of(seen.begin(), seen.end(), [&](const common::RobotDetection& d) { return d.seen_robot_id == self_; }))
     return false;
-  const std::string& sender = batch.header.sender;
-  if (batch.header.step >= holdings_step_[sender]) {
-    holdings_step_[sender] = batch.header.step;
-    auto& holdings = peer_holdings_[sender];
-    holdings.clear();
-    for (const auto& h : batch.holdings) holdings[h.origin] = h;
+  Hear(batch.header.sender, batch.header.step, batch.holdings);
+  for (const auto& h : batch.heard) {
+    const auto known = holdings_step_.find(h.robot);
+    if (known == holdings_step_.end() || h.step > known->second) Hear(h.robot, h.step, h.holdings);
   }
   for (const auto& run : batch.runs) Apply(run, batch.header);
   return true;

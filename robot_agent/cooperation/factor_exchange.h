@@ -93,7 +93,11 @@ bool TrackEstimateValid(const TrackEstimate& t, std::uint32_t first, std::uint32
 // the next step of the window or of the next one. Nor does another origin's step go to a peer that says another robot
 // sent it new steps of that origin within the last kAckLagSteps + 1 steps (it is being fed them). A batch the peer sent
 // at step h tells what it holds after the batches sent to it up to step h - kAckLagSteps: when it holds less of an
-// origin than those sent (a batch was lost), the sending starts again from what it holds.
+// origin than those sent (a batch was lost), the sending starts again from what it holds. A robot seen by one that
+// does not see it (a narrow field of view) never sends to it; so, with relaying on, a batch also passes on what the
+// sender last heard other robots hold (their newest batch's holdings, to whichever peer, with its step), each
+// robot's at most every kHeardSteps steps and only when newer than passed on before: the recipient takes it as if
+// it had heard it itself at that step, and sends such a robot only what it lacks by the freshest word of it.
 // Receiving: a batch is rejected whole (and counted) unless it is well formed and within its
 // window: opened_by_step no later than the batch's step and at most exchange_window_steps before
 // it, and the sender's step opened_by_step (held, in a run or the batch's opening) detects this
@@ -101,12 +105,15 @@ bool TrackEstimateValid(const TrackEstimate& t, std::uint32_t first, std::uint32
 // whose opening step cannot be found (the recipient lost the batch that carried it) is left out
 // as a gap, not rejected. An accepted batch's runs extend the logs: the steps already held are
 // skipped, a run that starts beyond the first step missing is left out (counted as a gap: the
-// sender will send from the count this agent says it holds).
+// sender will send from the count this agent says it holds). Holdings passed on are well formed (team robots, none
+// twice, not the sender's, of a step no later than the batch's) or the batch is rejected; those newer than what
+// this agent last heard of that robot replace it.
 class FactorExchange {
  public:
   static constexpr std::uint32_t kAckLagSteps = 2;
   static constexpr std::uint32_t kRelayLagSteps = 10;
   static constexpr std::uint32_t kTrackRefreshSteps = 10;
+  static constexpr std::uint32_t kHeardSteps = 10;
 
   explicit FactorExchange(const AgentOptions& options);
 
@@ -135,13 +142,22 @@ class FactorExchange {
   std::uint64_t steps_sent() const { return steps_sent_; }
 
   void Io(common::Archive& ar) {
-    ar(logs_, own_growing_, detected_at_, peer_holdings_, holdings_step_, sends_, session_start_, last_batch_, gaps_,
-       steps_received_, steps_again_, steps_sent_);
+    ar(logs_, own_growing_, detected_at_, peer_holdings_, holdings_step_, sends_, session_start_, last_batch_,
+       heard_passed_, gaps_, steps_received_, steps_again_, steps_sent_);
     if (ar.loading()) counted_.clear();
   }
 
  private:
   bool BatchValid(const FactorBatch& b) const;
+  // Holdings of team origins, none twice, a feeder of the team if any.
+  bool HoldingsValid(const std::vector<FactorHolding>& holdings) const;
+  // The holdings passed on.
+  bool HeardValid(const FactorBatch& b) const;
+  // What robot said it holds in its batch of its step `step`, when newer than what was heard of it.
+  void Hear(const std::string& robot, std::uint32_t step, const std::vector<FactorHolding>& holdings);
+  // What this agent heard other robots hold, newer than passed on to peer before; each robot's at most every
+  // kHeardSteps steps.
+  void AddHeard(const std::string& peer, std::uint32_t k, FactorBatch* batch);
   // A run's estimates: at most kMaxItems, each TrackEstimateValid, of a label a reading of its
   // step names, no label twice.
   static bool TracksValid(const FactorRun& run);
@@ -175,6 +191,12 @@ class FactorExchange {
   std::map<std::string, std::map<std::string, std::map<std::uint32_t, std::uint32_t>>> sends_;
   // Per peer: the step of the first batch of the current session, and of the last batch.
   std::map<std::string, std::uint32_t> session_start_, last_batch_;
+  // Per peer and robot: the step of the robot's holdings last passed on to the peer, and the own step it was done at.
+  struct Passed {
+    std::uint32_t step = 0, at = 0;
+    void Io(common::Archive& ar) { ar(step, at); }
+  };
+  std::map<std::string, std::map<std::string, Passed>> heard_passed_;
   int gaps_ = 0;
   std::uint64_t steps_received_ = 0, steps_again_ = 0, steps_sent_ = 0;
 };

@@ -101,13 +101,23 @@ struct FactorHolding {
   std::uint32_t fed_at = 0;
 };
 
+// What another robot said it holds in its batch of its step `step` (to whichever peer), passed on.
+struct HeardHoldings {
+  std::string robot;
+  std::uint32_t step = 0;
+  std::vector<FactorHolding> holdings;
+};
+
 // What one agent sends another after a step: the steps the recipient lacks, as far as the sender
-// knows, and what the sender holds (so that the recipient sends only what it lacks in turn).
-// opened_by_step: the sender's step whose scan detected the recipient, which opened the exchange.
+// knows, and what the sender holds (so that the recipient sends only what it lacks in turn), and
+// what the sender last heard other robots hold (so that the recipient knows it of robots that do
+// not send to it). opened_by_step: the sender's step whose scan detected the recipient, which
+// opened the exchange.
 struct FactorBatch {
   PeerHeader header;
   std::uint32_t opened_by_step = 0;
   std::vector<FactorHolding> holdings;
+  std::vector<HeardHoldings> heard;
   std::vector<FactorRun> runs;
   // The sender's step opened_by_step when the recipient may not hold it and the runs do not
   // carry it (so that the recipient can check the detection), else empty.
@@ -147,7 +157,10 @@ inline void Io(common::Archive& ar, LandmarkMovedNotice& n) {
 }
 inline void Io(common::Archive& ar, FactorRun& r) { ar(r.origin, r.first_step, r.first_pose, r.steps, r.tracks); }
 inline void Io(common::Archive& ar, FactorHolding& h) { ar(h.origin, h.steps, h.fed_by, h.fed_at); }
-inline void Io(common::Archive& ar, FactorBatch& b) { ar(b.header, b.opened_by_step, b.holdings, b.runs, b.opening); }
+inline void Io(common::Archive& ar, HeardHoldings& h) { ar(h.robot, h.step, h.holdings); }
+inline void Io(common::Archive& ar, FactorBatch& b) {
+  ar(b.header, b.opened_by_step, b.holdings, b.heard, b.runs, b.opening);
+}
 
 inline void Io(common::Archive& ar, PeerOutbox& o) { ar(o.measurements, o.maps, o.moved, o.factors); }
 inline void Io(common::Archive& ar, RendezvousEvent& e) { ar(e.peer, e.step, e.t_self_peer, e.covariance); }

@@ -118,6 +118,26 @@ void PutHeader(const cooperation::PeerHeader& h, M* m) {
   m->sequence_number(h.sequence);
 }
 
+std::vector<msg::FactorHolding> HoldingsMsg(const std::vector<cooperation::FactorHolding>& holdings) {
+  std::vector<msg::FactorHolding> out;
+  out.reserve(holdings.size());
+  for (const auto& h : holdings) {
+    msg::FactorHolding mh;
+    mh.origin_id(h.origin);
+    mh.steps(h.steps);
+    mh.fed_by(h.fed_by);
+    mh.fed_at(h.fed_at);
+    out.push_back(std::move(mh));
+  }
+  return out;
+}
+std::vector<cooperation::FactorHolding> HoldingsFrom(const std::vector<msg::FactorHolding>& holdings) {
+  std::vector<cooperation::FactorHolding> out;
+  out.reserve(holdings.size());
+  for (const auto& h : holdings) out.push_back({h.origin_id(), h.steps(), h.fed_by(), h.fed_at()});
+  return out;
+}
+
 }  // namespace
 
 msg::LandmarkEstimate ToMsg(const filters::MapLandmark& l) {
@@ -232,13 +252,13 @@ msg::FactorBatch ToMsg(const cooperation::FactorBatch& b) {
   msg::FactorBatch m;
   PutHeader(b.header, &m);
   m.opened_by_step(b.opened_by_step);
-  for (const auto& h : b.holdings) {
-    msg::FactorHolding mh;
-    mh.origin_id(h.origin);
-    mh.steps(h.steps);
-    mh.fed_by(h.fed_by);
-    mh.fed_at(h.fed_at);
-    m.holdings().push_back(std::move(mh));
+  m.holdings(HoldingsMsg(b.holdings));
+  for (const auto& h : b.heard) {
+    msg::HeardHoldings mh;
+    mh.robot_id(h.robot);
+    mh.step(h.step);
+    mh.holdings(HoldingsMsg(h.holdings));
+    m.heard().push_back(std::move(mh));
   }
   for (const auto& r : b.runs) {
     msg::FactorRun mr;
@@ -256,7 +276,8 @@ cooperation::FactorBatch FromMsg(const msg::FactorBatch& m) {
   cooperation::FactorBatch b;
   b.header = HeaderFrom(m.stamp(), m.recipient_id(), m.sequence_number());
   b.opened_by_step = m.opened_by_step();
-  for (const auto& h : m.holdings()) b.holdings.push_back({h.origin_id(), h.steps(), h.fed_by(), h.fed_at()});
+  b.holdings = HoldingsFrom(m.holdings());
+  for (const auto& h : m.heard()) b.heard.push_back({h.robot_id(), h.step(), HoldingsFrom(h.holdings())});
   for (const auto& mr : m.runs()) {
     cooperation::FactorRun r{mr.origin_id(), mr.first_step(), dds::FromMsg(mr.first_pose()), {}, {}};
     for (const auto& h : mr.steps()) {

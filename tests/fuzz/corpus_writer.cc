@@ -63,6 +63,7 @@ void WritePeerMessages(const std::string& dir) {
   batch.header = Header();
   batch.opened_by_step = 4;
   batch.holdings = {{"r2", 4, "", 0}};
+  batch.heard = {{"r3", 3, {{"r3", 3, "", 0}, {"r2", 2, "r1", 3}}}};
   robot_agent::cooperation::FactorRun run{"r2", 4, {0.0, 0.0, 0.0}, {}, {}};
   common::SensorStep step;
   step.lidar.stamp = {"r2", 4, 2.6};

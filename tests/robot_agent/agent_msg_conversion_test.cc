@@ -201,7 +201,7 @@ TEST(AgentMsgConversionTest, SharedStepsArriveAsTheOriginHoldsThem) {
   ExpectBitEqual(back.opening[0], run.steps.back());
 }
 
-TEST(AgentMsgConversionTest, TrackEstimatesArriveAsTheOriginHoldsThem) {
+TEST(AgentMsgConversionTest, TrackEstimatesAndHoldingsArriveAsSent) {
   cooperation::TrackEstimate t;
   t.label = 12;
   t.step = 9000;
@@ -218,7 +218,22 @@ TEST(AgentMsgConversionTest, TrackEstimatesArriveAsTheOriginHoldsThem) {
   b.header = {"r3", "r1", 9001, 900.1, 4};
   b.opened_by_step = 9001;
   b.runs.push_back({"r3", 8999, {}, {common::SensorStep{}, common::SensorStep{}}, {shared}});
+  b.holdings = {{"r3", 9001, "", 0}, {"r2", 4000, "r4", 8990}};
+  b.heard = {{"r2", 8995, {{"r2", 8995, "", 0}, {"r3", 7000, "r1", 8000}}}};
   const auto back = FromMsg(ToMsg(b));
+  ASSERT_EQ(back.holdings.size(), 2U);
+  EXPECT_EQ(back.holdings[1].origin, "r2");
+  EXPECT_EQ(back.holdings[1].steps, 4000U);
+  EXPECT_EQ(back.holdings[1].fed_by, "r4");
+  EXPECT_EQ(back.holdings[1].fed_at, 8990U);
+  ASSERT_EQ(back.heard.size(), 1U);
+  EXPECT_EQ(back.heard[0].robot, "r2");
+  EXPECT_EQ(back.heard[0].step, 8995U);
+  ASSERT_EQ(back.heard[0].holdings.size(), 2U);
+  EXPECT_EQ(back.heard[0].holdings[1].origin, "r3");
+  EXPECT_EQ(back.heard[0].holdings[1].steps, 7000U);
+  EXPECT_EQ(back.heard[0].holdings[1].fed_by, "r1");
+  EXPECT_EQ(back.heard[0].holdings[1].fed_at, 8000U);
   ASSERT_EQ(back.runs.size(), 1U);
   ASSERT_EQ(back.runs[0].tracks.size(), 1U);
   const cooperation::TrackEstimate& r = back.runs[0].tracks[0];

@@ -201,6 +201,38 @@ TEST(FactorExchange, APeerThatHearsTheOriginItselfGetsNoRelayedCopies) {
   EXPECT_EQ(t["c"].steps_received(), 80U);
 }
 
+// a and b meet at every step and so do b and c; from step kBlind on a also sees c, which does
+// not see a (a narrow field of view): c never sends a what it holds.
+constexpr std::uint32_t kBlind = 30;
+
+TEST(FactorExchange, WhatARobotThatDoesNotSendHoldsIsLearntFromThoseThatDo) {
+  ThreeAgents t;
+  std::uint32_t own_sent_to_c = 0;
+  std::map<std::string, std::uint32_t> passed_at;  // by sender, recipient and robot
+  for (std::uint32_t k = 1; k <= kBlind + 10; ++k) {
+    std::map<std::string, std::vector<std::string>> sees = {{"a", {"b"}}, {"b", {"a", "c"}}, {"c", {"b"}}};
+    if (k >= kBlind) sees["a"].push_back("c");
+    for (const auto& b : t.Run(k, sees)) {
+      if (b.header.sender == "a" && b.header.recipient == "c" && !b.runs.empty() && b.runs[0].origin == "a") {
+        own_sent_to_c += static_cast<std::uint32_t>(b.runs[0].steps.size());
+      }
+      // What is heard of a robot is passed on to a peer at most every kHeardSteps steps.
+      for (const auto& h : b.heard) {
+        EXPECT_NE(h.robot, b.header.recipient);
+        auto& last = passed_at[b.header.sender + b.header.recipient + h.robot];
+        EXPECT_TRUE(last == 0 || k >= last + FactorExchange::kHeardSteps) << k;
+        last = k;
+      }
+    }
+  }
+  // c had a's steps up to about kBlind from b; b told a what c holds, and a sent c only the
+  // steps since (not all kBlind + 10 of them, as it would knowing nothing).
+  EXPECT_EQ(passed_at.count("bac"), 1U) << "b passed on what it heard c hold to a";
+  EXPECT_EQ(t["c"].Held("a"), kBlind + 10);
+  EXPECT_LT(own_sent_to_c, 2 * FactorExchange::kRelayLagSteps);         // 40 knowing nothing
+  EXPECT_LT(t["c"].steps_again(), 2 * FactorExchange::kRelayLagSteps);  // 66 knowing nothing
+}
+
 TEST(FactorExchange, ALostBatchIsMadeGood) {
   ThreeAgents t;
   for (std::uint32_t k = 1; k <= 4; ++k) t.Run(k, {});
@@ -321,6 +353,29 @@ TEST_F(RejectedBatch, Malformed) {
   bad = good_;
   bad.runs[0].steps.resize(51, bad.runs[0].steps[0]);  // beyond max_batch_steps
   ExpectRejected(bad);
+}
+
+TEST_F(RejectedBatch, MalformedHoldingsPassedOn) {
+  const FactorHolding of_c{"c", 3, "", 0};
+  FactorBatch with = good_;
+  with.heard = {{"c", 8, {of_c}}};
+  FactorExchange a(Options("a"));
+  EXPECT_TRUE(a.Receive(with)) << "well formed";
+  const auto bad = [&](const std::vector<HeardHoldings>& heard) {
+    FactorBatch b = good_;
+    b.heard = heard;
+    ExpectRejected(b);
+  };
+  bad({{"z", 8, {of_c}}});                      // not of the team
+  bad({{"b", 8, {of_c}}});                      // the sender's own: in holdings
+  bad({{"c", 9, {of_c}}});                      // of a step after the batch's
+  bad({{"c", 0, {of_c}}});                      // of no step
+  bad({{"c", 8, {of_c}}, {"c", 7, {of_c}}});    // a robot twice
+  bad({{"c", 8, {{"z", 3, "", 0}}}});           // an origin not of the team
+  bad({{"c", 8, {of_c, of_c}}});                // an origin twice
+  bad({{"c", 8, {{"c", 3, "y", 2}}}});          // a feeder not of the team
+  FactorExchange without(Options("a", false));  // with relaying off, nothing is passed on
+  EXPECT_FALSE(without.Receive(with));
 }
 
 TEST_F(RejectedBatch, MalformedTrackEstimates) {
