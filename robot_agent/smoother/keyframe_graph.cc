@@ -258,6 +258,25 @@ void KeyframeGraph::StartMovers() {
   }
 }
 
+double KeyframeGraph::TrialCost(std::uint32_t track, double v_mps, double w_radps) const {
+  KeyframeGraph trial = *this;
+  trial.history_.clear();  // not needed to solve the window
+  auto& model = trial.mover_models_.at(track);
+  model.v_mps = v_mps;
+  model.w_radps = w_radps;
+  for (auto& kf : trial.window_) {
+    for (auto& r : kf.readings) r.inlier = true;
+  }
+  trial.max_iterations_ = kTrialIterations;
+  return trial.SolveOnce();
+}
+
+int KeyframeGraph::ChainStates(std::uint32_t track) const {
+  const auto first = movers_.lower_bound(MoverKey(track, 0));
+  const auto end = movers_.lower_bound(MoverKey(track + 1, 0));
+  return static_cast<int>(std::distance(first, end));
+}
+
 void KeyframeGraph::DropStoppedChains() {
   const std::set<Var> held(prior_.vars.begin(), prior_.vars.end());
   for (auto it = movers_.begin(); it != movers_.end();) {

@@ -140,6 +140,14 @@ class KeyframeGraph {
     Eigen::Matrix3d covariance;
   };
   Prediction PredictMover(const Mover& mover, int step) const;
+  // The cost the window's factors reach with `track` moving by `model` (its start heading kept):
+  // a copy of the graph, every reading taken in under the Huber loss (no gate, so that no model
+  // gains by leaving readings out), solved from the current estimate by at most
+  // kTrialIterations iterations. This graph is unchanged.
+  static constexpr int kTrialIterations = 5;
+  double TrialCost(std::uint32_t track, double v_mps, double w_radps) const;
+  // The number of states of the track's chain in the window.
+  int ChainStates(std::uint32_t track) const;
   const Eigen::Vector3d& Correction() const { return correction_; }
   // Every keyframe's step and pose, the marginalized ones as they were when they left.
   std::vector<std::pair<int, common::Pose2>> Path() const;

@@ -1,6 +1,7 @@
 #include "robot_agent/smoother/online_smoother.h"
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <utility>
@@ -12,6 +13,19 @@
 
 namespace mrslam::robot_agent::smoother {
 namespace {
+
+// The index of the candidate (v, w) nearest to (v, w); 0 if there is none.
+int NearestCandidate(const std::vector<KnownKinematics>& candidates, double v_mps, double w_radps) {
+  int nearest = 0;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (const double d = std::hypot(candidates[i].v_mps - v_mps, candidates[i].w_radps - w_radps); d < best) {
+      best = d;
+      nearest = static_cast<int>(i);
+    }
+  }
+  return nearest;
+}
 
 using common::Pose2;
 using filters::FilterEstimate;
@@ -76,7 +90,35 @@ void OnlineSmoother::UpdateTracks(const FilterEstimate& front) {
       movers[l.track_id] = {l.v_mps, l.w_radps, common::WrapAngle(l.mean(2) + shift.heading)};
     }
   }
+  if (options_.filter.landmark_kinematics == LandmarkKinematics::kKnownCandidates) ChooseKinematics(&movers);
   graph_.SetTracks(std::move(fixed), movers);
+}
+
+void OnlineSmoother::ChooseKinematics(std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers) {
+  const auto& candidates = options_.filter.known_kinematics;
+  for (auto& entry : *movers) {
+    const std::uint32_t track = entry.first;
+    KeyframeGraph::MoverModel& model = entry.second;
+    const int states = graph_.ChainStates(track);
+    auto held = kinematics_.find(track);
+    if (held == kinematics_.end() || states < kMinChoiceStates) {  // the front end's, to begin with
+      held = kinematics_.insert_or_assign(track, NearestCandidate(candidates, model.v_mps, model.w_radps)).first;
+    } else if (states < options_.filter.smoother.window_keyframes) {
+      const auto cost = [&](std::size_t i) {
+        return graph_.TrialCost(track, candidates[i].v_mps, candidates[i].w_radps);
+      };
+      double best = cost(held->second) - kKinematicsSwitchMargin;
+      for (std::size_t i = 0; i < candidates.size(); ++i) {
+        if (static_cast<int>(i) == held->second) continue;
+        if (const double c = cost(i); c < best) {
+          best = c;
+          held->second = static_cast<int>(i);
+        }
+      }
+    }
+    model.v_mps = candidates.at(held->second).v_mps;
+    model.w_radps = candidates.at(held->second).w_radps;
+  }
 }
 
 void OnlineSmoother::Process(const common::SensorStep& step) {
@@ -256,6 +298,10 @@ std::vector<MapLandmark> OnlineSmoother::GraphLandmarks(int step) const {
     const KeyframeGraph::Prediction p = graph_.PredictMover(l, step);
     m.mean = p.state.Vector();
     m.covariance = p.covariance;
+    if (const auto chosen = kinematics_.find(l.track); chosen != kinematics_.end()) {
+      m.v_mps = options_.filter.known_kinematics.at(chosen->second).v_mps;
+      m.w_radps = options_.filter.known_kinematics.at(chosen->second).w_radps;
+    }
     out.push_back(m);
   }
   return out;
@@ -264,7 +310,7 @@ std::vector<MapLandmark> OnlineSmoother::GraphLandmarks(int step) const {
 void OnlineSmoother::Io(common::Archive& ar) {
   front_end_->Io(ar);
   ar(calibration_, graph_, front_, step_, since_keyframe_, lost_keyframes_, lost_since_step_, recoveries_, peers_,
-     movers_);
+     movers_, kinematics_);
 }
 
 std::size_t OnlineSmoother::EstimatorBytes() const {

@@ -65,6 +65,15 @@ class OnlineSmoother : public filters::SlamFilter {
   std::vector<KeyframeGraph::Reading> LabelledReadings(const common::SensorStep& step,
                                                        const filters::FilterEstimate& front) const;
   void UpdateTracks(const filters::FilterEstimate& front);
+  // Among known candidate kinematics, each mover's (v, w): the front end's candidate until the
+  // graph's chain of it has kMinChoiceStates states; then, at every keyframe while the chain is
+  // younger than the window, the candidate whose KeyframeGraph::TrialCost is lowest, the one held
+  // unless another's is lower by more than kKinematicsSwitchMargin (odds of 100 to 1, 2 ln 100:
+  // no flapping between candidates the evidence cannot tell apart); then held. The front end's
+  // particles settle on one candidate within a few steps and rarely come back from a wrong one.
+  static constexpr int kMinChoiceStates = 3;
+  static constexpr double kKinematicsSwitchMargin = 9.21;
+  void ChooseKinematics(std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers);
   filters::MapLandmark FrontLandmark(std::uint32_t track) const;
   std::vector<filters::MapLandmark> GraphLandmarks(int step) const;
   std::vector<filters::MapLandmark> OwnLandmarks(int step) const;
@@ -99,6 +108,7 @@ class OnlineSmoother : public filters::SlamFilter {
   int recoveries_ = 0;
   PeerLandmarks peers_;
   MoverMemory movers_;
+  std::map<std::uint32_t, int> kinematics_;  // per moving track: the candidate the graph uses
 };
 
 }  // namespace mrslam::robot_agent::smoother
