@@ -260,12 +260,12 @@ std::optional<FactorBatch> FactorExchange::BatchFor(const std::string& peer, std
   batch.header = {self_, peer, k, time_s, 0};
   batch.opened_by_step = detected_at_.at(peer);
   for (const auto& [origin, log] : logs_) batch.holdings.push_back({origin, log.Held(), log.fed_by, log.fed_at});
-  if (options_.cooperation.relay_factors) AddHeard(peer, k, &batch);
   const auto heard = holdings_step_.find(peer);
   const bool news = heard != holdings_step_.end() && heard->second >= session_start_[peer];
   const bool greeting = !news && k <= session_start_[peer] + kAckLagSteps;
   if (!greeting) AddRuns(peer, k, &batch);
   if (batch.runs.empty() && !greeting) return std::nullopt;
+  if (options_.cooperation.relay_factors) AddHeard(peer, k, &batch);
   const FactorRun* own = batch.runs.empty() || batch.runs.front().origin != self_ ? nullptr : &batch.runs.front();
   const bool carried = own != nullptr && batch.opened_by_step >= own->first_step &&
                        batch.opened_by_step - own->first_step < own->steps.size();
@@ -304,7 +304,7 @@ bool FactorExchange::BatchValid(const FactorBatch& b) const {
       b.header.step - b.opened_by_step > static_cast<std::uint32_t>(co.exchange_window_steps)) {
     return false;
   }
-  if (b.runs.size() > options_.team.size() || !HoldingsValid(b.holdings) || !HeardValid(b)) return false;
+  if (b.runs.size() > options_.team.size() || !HoldingsValid(b.holdings, b.header.step) || !HeardValid(b)) return false;
   std::set<std::string> seen;
   std::size_t steps = 0;
   for (const auto& run : b.runs) {
@@ -321,12 +321,16 @@ bool FactorExchange::BatchValid(const FactorBatch& b) const {
   return b.opening.size() <= 1 && (b.opening.empty() || SharedStepValid(b.opening[0], b.opened_by_step));
 }
 
-bool FactorExchange::HoldingsValid(const std::vector<FactorHolding>& holdings) const {
+bool FactorExchange::HoldingsValid(const std::vector<FactorHolding>& holdings, std::uint32_t step) const {
   if (holdings.size() > options_.team.size()) return false;
+  // The robots step together: nobody holds more steps of an origin, or was fed at a later step, than the
+  // report's step, give or take a window's skew.
+  const std::uint64_t latest =
+      std::uint64_t{step} + static_cast<std::uint64_t>(options_.cooperation.exchange_window_steps);
   std::set<std::string> seen;
   return std::all_of(holdings.begin(), holdings.end(), [&](const FactorHolding& h) {
     return options_.TeamIndex(h.origin) >= 0 && seen.insert(h.origin).second &&
-           (h.fed_by.empty() || options_.TeamIndex(h.fed_by) >= 0);
+           (h.fed_by.empty() || options_.TeamIndex(h.fed_by) >= 0) && h.steps <= latest && h.fed_at <= latest;
   });
 }
 
@@ -335,8 +339,8 @@ bool FactorExchange::HeardValid(const FactorBatch& b) const {
   if (!options_.cooperation.relay_factors || b.heard.size() > options_.team.size()) return false;
   std::set<std::string> seen;
   return std::all_of(b.heard.begin(), b.heard.end(), [&](const HeardHoldings& h) {
-    return options_.TeamIndex(h.robot) >= 0 && h.robot != b.header.sender && seen.insert(h.robot).second &&
-           h.step > 0 && h.step <= b.header.step && HoldingsValid(h.holdings);
+    return options_.TeamIndex(h.robot) >= 0 && h.robot != b.header.sender && h.robot != self_ &&
+           seen.insert(h.robot).second && h.step > 0 && h.step <= b.header.step && HoldingsValid(h.holdings, h.step);
   });
 }
 

@@ -105,9 +105,11 @@ bool TrackEstimateValid(const TrackEstimate& t, std::uint32_t first, std::uint32
 // whose opening step cannot be found (the recipient lost the batch that carried it) is left out
 // as a gap, not rejected. An accepted batch's runs extend the logs: the steps already held are
 // skipped, a run that starts beyond the first step missing is left out (counted as a gap: the
-// sender will send from the count this agent says it holds). Holdings passed on are well formed (team robots, none
-// twice, not the sender's, of a step no later than the batch's) or the batch is rejected; those newer than what
-// this agent last heard of that robot replace it.
+// sender will send from the count this agent says it holds). Holdings, the sender's and those passed on, are well
+// formed (team origins, none twice, counts and feeding steps no later than the report's step plus
+// exchange_window_steps; passed on: of team robots but the sender and this agent, none twice, of a step no later
+// than the batch's) or the batch is rejected; those passed on replace what this agent last heard of that robot when
+// newer. What is passed on goes only in a batch that is sent.
 class FactorExchange {
  public:
   static constexpr std::uint32_t kAckLagSteps = 2;
@@ -149,11 +151,12 @@ class FactorExchange {
 
  private:
   bool BatchValid(const FactorBatch& b) const;
-  // Holdings of team origins, none twice, a feeder of the team if any.
-  bool HoldingsValid(const std::vector<FactorHolding>& holdings) const;
+  // Holdings reported at `step`: of team origins, none twice, a feeder of the team if any, counts and
+  // feeding steps no later than step + exchange_window_steps.
+  bool HoldingsValid(const std::vector<FactorHolding>& holdings, std::uint32_t step) const;
   // The holdings passed on.
   bool HeardValid(const FactorBatch& b) const;
-  // What robot said it holds in its batch of its step `step`, when newer than what was heard of it.
+  // What robot said it holds in its batch of its step `step`, unless older than what was heard of it.
   void Hear(const std::string& robot, std::uint32_t step, const std::vector<FactorHolding>& holdings);
   // What this agent heard other robots hold, newer than passed on to peer before; each robot's at most every
   // kHeardSteps steps.
@@ -184,8 +187,8 @@ class FactorExchange {
   mutable std::map<std::string, Counted> counted_;  // HeldBytes's count so far, per origin
   bool own_growing_ = true;
   std::map<std::string, std::uint32_t> detected_at_;  // per peer: the last own step detecting it
-  // Per peer and origin: the count it last said it holds (of its newest batch, sent at
-  // holdings_step_), and what was sent to it (by the step sent at: steps 1..n sent).
+  // Per robot and origin: the count it last said it holds (in its newest batch heard of, directly or passed on,
+  // sent at holdings_step_), and per peer what was sent to it (by the step sent at: steps 1..n sent).
   std::map<std::string, std::map<std::string, FactorHolding>> peer_holdings_;
   std::map<std::string, std::uint32_t> holdings_step_;
   std::map<std::string, std::map<std::string, std::map<std::uint32_t, std::uint32_t>>> sends_;

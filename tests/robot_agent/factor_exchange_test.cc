@@ -366,14 +366,20 @@ TEST_F(RejectedBatch, MalformedHoldingsPassedOn) {
     b.heard = heard;
     ExpectRejected(b);
   };
-  bad({{"z", 8, {of_c}}});                      // not of the team
-  bad({{"b", 8, {of_c}}});                      // the sender's own: in holdings
-  bad({{"c", 9, {of_c}}});                      // of a step after the batch's
-  bad({{"c", 0, {of_c}}});                      // of no step
-  bad({{"c", 8, {of_c}}, {"c", 7, {of_c}}});    // a robot twice
-  bad({{"c", 8, {{"z", 3, "", 0}}}});           // an origin not of the team
-  bad({{"c", 8, {of_c, of_c}}});                // an origin twice
-  bad({{"c", 8, {{"c", 3, "y", 2}}}});          // a feeder not of the team
+  bad({{"z", 8, {of_c}}});                            // not of the team
+  bad({{"b", 8, {of_c}}});                            // the sender's own: in holdings
+  bad({{"c", 9, {of_c}}});                            // of a step after the batch's
+  bad({{"c", 0, {of_c}}});                            // of no step
+  bad({{"c", 8, {of_c}}, {"c", 7, {of_c}}});          // a robot twice
+  bad({{"c", 8, {{"z", 3, "", 0}}}});                 // an origin not of the team
+  bad({{"c", 8, {of_c, of_c}}});                      // an origin twice
+  bad({{"c", 8, {{"c", 3, "y", 2}}}});                // a feeder not of the team
+  bad({{"a", 8, {of_c}}});                            // the recipient's own
+  bad({{"c", 8, {{"c", 8 + kWindow + 1, "", 0}}}});   // more steps than there can be
+  bad({{"c", 8, {{"c", 3, "a", 8 + kWindow + 1}}}});  // fed at a later step than there can be
+  FactorBatch claims = good_;                         // nor in the sender's own holdings
+  claims.holdings.push_back({"c", 8 + kWindow + 1, "", 0});
+  ExpectRejected(claims);
   FactorExchange without(Options("a", false));  // with relaying off, nothing is passed on
   EXPECT_FALSE(without.Receive(with));
 }
