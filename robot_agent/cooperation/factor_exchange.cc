@@ -411,10 +411,8 @@ bool FactorExchange::Receive(const FactorBatch& batch) {
   if (std::none_of(seen.begin(), seen.end(), [&](const common::RobotDetection& d) { return d.seen_robot_id == self_; }))
     return false;
   Hear(batch.header.sender, batch.header.step, batch.holdings);
-  for (const auto& h : batch.heard) {
-    const auto known = holdings_step_.find(h.robot);
-    if (known == holdings_step_.end() || h.step > known->second) Hear(h.robot, h.step, h.holdings);
-  }
+  // A robot's batches of one step all say the same: a word of the step already heard changes nothing.
+  for (const auto& h : batch.heard) Hear(h.robot, h.step, h.holdings);
   for (const auto& run : batch.runs) Apply(run, batch.header);
   return true;
 }

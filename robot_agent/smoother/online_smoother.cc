@@ -1,7 +1,6 @@
 #include "robot_agent/smoother/online_smoother.h"
 
 #include <cmath>
-#include <limits>
 #include <map>
 #include <set>
 #include <utility>
@@ -13,19 +12,6 @@
 
 namespace mrslam::robot_agent::smoother {
 namespace {
-
-// The index of the candidate (v, w) nearest to (v, w); 0 if there is none.
-int NearestCandidate(const std::vector<KnownKinematics>& candidates, double v_mps, double w_radps) {
-  int nearest = 0;
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    if (const double d = std::hypot(candidates[i].v_mps - v_mps, candidates[i].w_radps - w_radps); d < best) {
-      best = d;
-      nearest = static_cast<int>(i);
-    }
-  }
-  return nearest;
-}
 
 using common::Pose2;
 using filters::FilterEstimate;
@@ -102,7 +88,9 @@ void OnlineSmoother::ChooseKinematics(std::map<std::uint32_t, KeyframeGraph::Mov
     const int states = graph_.ChainStates(track);
     auto held = kinematics_.find(track);
     if (held == kinematics_.end() || states < kMinChoiceStates) {  // the front end's, to begin with
-      held = kinematics_.insert_or_assign(track, NearestCandidate(candidates, model.v_mps, model.w_radps)).first;
+      held =
+          kinematics_.insert_or_assign(track, filters::NearestKnownKinematics(candidates, model.v_mps, model.w_radps))
+              .first;
     } else if (states < options_.filter.smoother.window_keyframes) {
       const auto cost = [&](std::size_t i) {
         return graph_.TrialCost(track, candidates[i].v_mps, candidates[i].w_radps);
