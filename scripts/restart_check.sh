@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Agents that come back (docs/faults.md): for each seed, runs the scenario once uninterrupted and
 # once with `mrslam_launch --restart 1`, killing (SIGKILL) a random agent at a random step of the
-# second run; checks that the second run completes, that its numbers (summary.json without times,
-# metrics.csv) equal the first's, that the summary counts one restart, and that nothing the run
+# second run; checks that the second run completes, that its numbers (summary.json without times
+# and peer traffic, metrics.csv) equal the first's, that the summary counts one restart, and that nothing the run
 # made is left in /dev/shm once the launcher has exited.
 # The victim is killed at a moment drawn at random between 10% and 80% of the uninterrupted run's
 # wall time after the launcher started (the launcher says after which step the agent died).
@@ -47,8 +47,10 @@ s = json.load(open(sys.argv[1]))
 for k in ("wall_seconds", "evaluator_wall_seconds", "dds_domain", "cpu_seconds", "cpu_cores_mean", "peak_rss_mib"):
     s.pop(k, None)
 for r in s["robots"].values():
+    # Times, and the peer traffic: with shared raw measurements a restored agent is sent again what
+    # its snapshot did not hold.
     for k in ("step_cpu_ms_median", "step_cpu_ms_p99", "latency_us_median", "latency_us_p99", "restarts",
-              "restart_comeback_s"):
+              "restart_comeback_s", "peer_bytes_sent_per_s", "peer_bytes_received_per_s"):
         r.pop(k, None)
 print(json.dumps(s, sort_keys=True))
 PY

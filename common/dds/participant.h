@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -105,7 +106,14 @@ class Writer {
     writer_ = participant.publisher()->create_datawriter(t, participant.WriterQos(history));
     if (writer_ == nullptr) throw DdsError("cannot create a writer on topic '" + topic + "'");
   }
-  ~Writer() { participant_.publisher()->delete_datawriter(writer_); }
+  // The history is emptied first: Fast DDS 2.9's writer deletion releases the samples one by one
+  // while its heartbeat timer may still walk them, which was seen to spin for ever
+  // (docs/faults.md, Teardown).
+  ~Writer() {
+    std::size_t removed = 0;
+    writer_->clear_history(&removed);
+    participant_.publisher()->delete_datawriter(writer_);
+  }
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
 
