@@ -92,6 +92,7 @@ const std::vector<std::string>& AggregatedMetrics() {
                                                    "common_landmarks_within_3sd",
                                                    "mean_nees",
                                                    "final_trajectory_rmse_m",
+                                                   "final_heading_rmse_deg",
                                                    "step_cpu_ms_median"};
   return metrics;
 }

@@ -190,6 +190,7 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     // A filter's final trajectory is its online path.
     ExpectFiniteAtLeast(r, "final_trajectory_rmse_m", 1e-9, id);
     EXPECT_NEAR(r["final_trajectory_rmse_m"].get<double>(), r["position_rmse_m"].get<double>(), 1e-9) << id;
+    EXPECT_NEAR(r["final_heading_rmse_deg"].get<double>(), r["heading_rmse_deg"].get<double>(), 1e-9) << id;
     EXPECT_GE(r["step_cpu_ms_p99"].get<double>(), r["step_cpu_ms_median"].get<double>()) << id;
     // Every estimate travels: positive latency beyond processing, timed at every step; in lockstep
     // the simulator waits for every estimate, so none comes after the next step's data.
@@ -393,6 +394,7 @@ TEST(LauncherTest, TheOnlineSmootherRunsInLockstepAndBeatsDeadReckoning) {
     EXPECT_LT(robot["position_rmse_m"].get<double>(), robot["dead_reckoning_rmse_m"].get<double>()) << id;
     EXPECT_LT(robot["mean_nees"].get<double>(), 30.0) << id;
     ExpectFiniteAtLeast(robot, "final_trajectory_rmse_m", 1e-9, id);
+    ExpectFiniteAtLeast(robot, "final_heading_rmse_deg", 1e-9, id);
     EXPECT_LT(robot["final_trajectory_rmse_m"].get<double>(), robot["dead_reckoning_rmse_m"].get<double>()) << id;
     online_sum += robot["position_rmse_m"].get<double>();
     final_sum += robot["final_trajectory_rmse_m"].get<double>();

@@ -160,16 +160,21 @@ TEST_F(RunEvaluatorTest, AnAnnouncedFinalTrajectoryIsAwaitedAndScored) {
   evaluator.AddOdometry("r2", odometry);
   EXPECT_FALSE(evaluator.Complete());
   EXPECT_NE(evaluator.Missing().find("final trajectory, 0 of 2 chunks"), std::string::npos) << evaluator.Missing();
-  evaluator.AddFinalTrajectory("r1", 1, {{1, 0.1, {0.0, 0.1, 0.0}}});
+  evaluator.AddFinalTrajectory("r1", 1, {{1, 0.1, {0.0, 0.1, 0.2}}});
   EXPECT_FALSE(evaluator.Complete());
   evaluator.AddFinalTrajectory("r1", 0, {{0, 0.0, {0.0, 0.0, 0.0}}});
   ASSERT_TRUE(evaluator.Complete()) << evaluator.Missing();
   const nlohmann::json summary = evaluator.Finish(0.0);
-  // r1: its final trajectory is 0 and 0.1 m off; r2, a filter, is scored on its online path.
+  // r1: its final trajectory is 0 and 0.1 m off, 0 and 0.2 rad; r2, a filter, is scored on its
+  // online path.
   EXPECT_NEAR(summary["robots"]["r1"]["final_trajectory_rmse_m"].get<double>(), std::sqrt(0.01 / 2.0), 1e-12);
+  EXPECT_NEAR(summary["robots"]["r1"]["final_heading_rmse_deg"].get<double>(),
+              common::DegFromRad(std::sqrt(0.04 / 2.0)), 1e-9);
   EXPECT_NEAR(summary["robots"]["r1"]["position_rmse_m"].get<double>(), 0.5, 1e-12);
   EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["final_trajectory_rmse_m"].get<double>(),
                    summary["robots"]["r2"]["position_rmse_m"].get<double>());
+  EXPECT_DOUBLE_EQ(summary["robots"]["r2"]["final_heading_rmse_deg"].get<double>(),
+                   summary["robots"]["r2"]["heading_rmse_deg"].get<double>());
   EXPECT_TRUE(std::filesystem::exists(out_dir_ + "/trajectories/r1_final.tum"));
 }
 

@@ -274,7 +274,9 @@ nlohmann::json RunEvaluator::Finish(double wall_seconds) {
   for (const auto& r : scenario_.robots) {
     RobotRun& robot = robots_.at(r.id);
     summary["robots"][r.id] = RobotSummaryJson(r.id, robot);
-    summary["robots"][r.id]["final_trajectory_rmse_m"] = ScoreFinalTrajectory(r.id, &robot);
+    const FinalScore final_score = ScoreFinalTrajectory(r.id, &robot);
+    summary["robots"][r.id]["final_trajectory_rmse_m"] = final_score.position_rmse_m;
+    summary["robots"][r.id]["final_heading_rmse_deg"] = final_score.heading_rmse_deg;
     robot.tum_estimate.close();
     robot.tum_truth.close();
   }
@@ -288,26 +290,31 @@ nlohmann::json RunEvaluator::Finish(double wall_seconds) {
   return summary;
 }
 
-double RunEvaluator::ScoreFinalTrajectory(const std::string& id, RobotRun* robot) {
+RunEvaluator::FinalScore RunEvaluator::ScoreFinalTrajectory(const std::string& id, RobotRun* robot) {
   if (robot->final_chunks.empty()) {  // the online path, written as it went
     robot->tum_final.close();
-    return robot->online_count == 0 ? 0.0 : std::sqrt(robot->online_sum_sq / static_cast<double>(robot->online_count));
+    if (robot->online_count == 0) return {};
+    return {std::sqrt(robot->online_sum_sq / static_cast<double>(robot->online_count)),
+            robot->scorer->Summary().heading_rmse_deg};
   }
   robot->tum_final.close();
   OpenOrThrow(robot->tum_final, std::filesystem::path(out_dir_) / "trajectories" / (id + "_final.tum"));
-  double sum = 0.0;
+  double sum = 0.0, heading_sum = 0.0;
   std::size_t n = 0;
   for (const auto& [chunk, poses] : robot->final_chunks) {
     for (const auto& p : poses) {
       const common::Pose2* truth = robot->truth_own.Find(p.step);
       if (truth == nullptr) continue;
       sum += (p.pose.Translation() - truth->Translation()).squaredNorm();
+      const double heading_error = common::WrapAngle(p.pose.heading - truth->heading);
+      heading_sum += heading_error * heading_error;
       ++n;
       robot->tum_final << TumLine(p.time_s, p.pose);
     }
   }
   robot->tum_final.close();
-  return n == 0 ? 0.0 : std::sqrt(sum / static_cast<double>(n));
+  if (n == 0) return {};
+  return {std::sqrt(sum / static_cast<double>(n)), common::DegFromRad(std::sqrt(heading_sum / static_cast<double>(n)))};
 }
 
 nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const RobotRun& robot) const {

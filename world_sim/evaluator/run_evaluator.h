@@ -119,8 +119,11 @@ class RunEvaluator {
   // The robot's summary entry; the union completeness over the robots whose frame it knows.
   nlohmann::json RobotSummaryJson(const std::string& id, const RobotRun& robot) const;
   // The robot's final trajectory (the agent's, else its online path), scored against the truth
-  // and written as trajectories/<id>_final.tum; returns its position RMSE.
-  double ScoreFinalTrajectory(const std::string& id, RobotRun* robot);
+  // and written as trajectories/<id>_final.tum: its position RMSE (m) and heading RMSE (deg).
+  struct FinalScore {
+    double position_rmse_m = 0.0, heading_rmse_deg = 0.0;
+  };
+  FinalScore ScoreFinalTrajectory(const std::string& id, RobotRun* robot);
   // The robot's rendezvous, each by the transform held at the end of the encounter.
   nlohmann::json ScoreRendezvous(const common::Pose2& frame, const RobotEstimate& last) const;
 
