@@ -148,6 +148,8 @@ class KeyframeGraph {
   double TrialCost(std::uint32_t track, double v_mps, double w_radps) const;
   // The number of states of the track's chain in the window.
   int ChainStates(std::uint32_t track) const;
+  // The last model SetTracks gave each track once moving.
+  const std::map<std::uint32_t, MoverModel>& MoverModels() const { return mover_models_; }
   const Eigen::Vector3d& Correction() const { return correction_; }
   // Every keyframe's step and pose, the marginalized ones as they were when they left.
   std::vector<std::pair<int, common::Pose2>> Path() const;

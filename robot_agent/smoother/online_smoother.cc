@@ -60,7 +60,7 @@ std::vector<KeyframeGraph::Reading> OnlineSmoother::LabelledReadings(const commo
   return out;
 }
 
-void OnlineSmoother::UpdateTracks(const FilterEstimate& front) {
+void OnlineSmoother::UpdateTracks(const FilterEstimate& front, const std::vector<KeyframeGraph::Reading>& readings) {
   std::set<std::uint32_t> fixed;
   std::map<std::uint32_t, KeyframeGraph::MoverModel> movers;
   const Pose2 shift = common::Compose(graph_.Pose(), common::Inverse(front.pose));
@@ -76,8 +76,61 @@ void OnlineSmoother::UpdateTracks(const FilterEstimate& front) {
       movers[l.track_id] = {l.v_mps, l.w_radps, common::WrapAngle(l.mean(2) + shift.heading)};
     }
   }
-  if (options_.filter.landmark_kinematics == LandmarkKinematics::kKnownCandidates) ChooseKinematics(&movers);
+  if (options_.filter.landmark_kinematics == LandmarkKinematics::kKnownCandidates) {
+    KeepChains(fixed, &movers);
+    JoinRemapped(front, shift, readings, &movers);
+    ChooseKinematics(&movers);
+  }
   graph_.SetTracks(std::move(fixed), movers);
+}
+
+void OnlineSmoother::KeepChains(const std::set<std::uint32_t>& fixed,
+                                std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers) const {
+  for (const KeyframeGraph::Mover& m : graph_.Movers()) {
+    if (movers->count(m.track) == 0 && fixed.count(m.track) == 0) (*movers)[m.track] = graph_.MoverModels().at(m.track);
+  }
+}
+
+void OnlineSmoother::JoinRemapped(const FilterEstimate& front, const Pose2& shift,
+                                  const std::vector<KeyframeGraph::Reading>& readings,
+                                  std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers) {
+  std::set<std::uint32_t> read_now;
+  for (const auto& r : readings) read_now.insert(r.track);
+  const Eigen::Matrix2d rot = common::ComposeJacobianRight(shift, {}).topLeftCorner<2, 2>();
+  const double gate_d2 = common::ChiSquare2Quantile(options_.cooperation.match_gate_probability);
+  const auto& candidates = options_.filter.known_kinematics;
+  const std::vector<KeyframeGraph::Mover> chains = graph_.Movers();
+  for (const MapLandmark& l : front.landmarks) {
+    const auto model = movers->find(l.track_id);
+    if (model == movers->end() || joined_.count(l.track_id) > 0 || graph_.ChainStates(l.track_id) > 0) continue;
+    const Eigen::Vector2d p = common::Compose(shift, Pose2::FromVector(l.mean)).Translation();
+    const Eigen::Matrix2d p_cov = rot * l.covariance.topLeftCorner<2, 2>() * rot.transpose();
+    const int candidate = filters::NearestKnownKinematics(candidates, model->second.v_mps, model->second.w_radps);
+    double best = gate_d2;
+    std::uint32_t chain = 0;
+    for (const KeyframeGraph::Mover& m : chains) {
+      const auto held = kinematics_.find(m.track);
+      if (m.track == l.track_id || read_now.count(m.track) > 0 || m.step >= static_cast<int>(l.first_seen_step) ||
+          held == kinematics_.end() || held->second != candidate) {
+        continue;
+      }
+      const KeyframeGraph::Prediction at = graph_.PredictMover(m, step_);
+      const Eigen::Vector2d d = p - at.state.Translation();
+      const double d2 = d.dot((p_cov + at.covariance.topLeftCorner<2, 2>()).ldlt().solve(d));
+      if (d2 <= best) {
+        best = d2;
+        chain = m.track;
+      }
+    }
+    if (chain == 0) continue;
+    joined_[l.track_id] = chain;
+  }
+  for (const auto& [track, chain] : joined_) {
+    const auto model = movers->find(track);
+    if (model == movers->end()) continue;
+    (*movers)[chain] = model->second;
+    movers->erase(track);
+  }
 }
 
 void OnlineSmoother::ChooseKinematics(std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers) {
@@ -127,7 +180,10 @@ void OnlineSmoother::Advance(const common::SensorStep& step) {
   ++since_keyframe_;
   if (readings.empty() && since_keyframe_ < options_.filter.smoother.max_keyframe_gap_steps) return;
   since_keyframe_ = 0;
-  UpdateTracks(front_);
+  UpdateTracks(front_, readings);
+  for (auto& r : readings) {
+    if (const auto joined = joined_.find(r.track); joined != joined_.end()) r.track = joined->second;
+  }
   graph_.AddKeyframe(step_, readings);
   graph_.Solve();
   CheckLost(step_);
@@ -298,12 +354,12 @@ std::vector<MapLandmark> OnlineSmoother::GraphLandmarks(int step) const {
 void OnlineSmoother::Io(common::Archive& ar) {
   front_end_->Io(ar);
   ar(calibration_, graph_, front_, step_, since_keyframe_, lost_keyframes_, lost_since_step_, recoveries_, peers_,
-     movers_, kinematics_);
+     movers_, kinematics_, joined_);
 }
 
 std::size_t OnlineSmoother::EstimatorBytes() const {
   return sizeof(*this) + front_end_->EstimatorBytes() + filters::EstimateBytes(front_) + graph_.EstimatorBytes() +
-         peers_.Bytes() + movers_.Bytes();
+         peers_.Bytes() + movers_.Bytes() + filters::ElementBytes(kinematics_) + filters::ElementBytes(joined_);
 }
 
 // The own map: the graph's landmarks and the front end's others (not in the graph yet),
@@ -315,7 +371,7 @@ std::vector<MapLandmark> OnlineSmoother::OwnLandmarks(int step) const {
   const Pose2 shift = common::Compose(graph_.Pose(), common::Inverse(front_.pose));
   const Eigen::Matrix2d rot = common::ComposeJacobianRight(shift, {}).topLeftCorner<2, 2>();
   for (const MapLandmark& l : front_.landmarks) {
-    if (in_graph.count(l.track_id) > 0) continue;
+    if (in_graph.count(l.track_id) > 0 || joined_.count(l.track_id) > 0) continue;
     MapLandmark m = l;
     m.mean = common::Compose(shift, Pose2::FromVector(l.mean)).Vector();
     m.covariance.topLeftCorner<2, 2>() = rot * l.covariance.topLeftCorner<2, 2>() * rot.transpose();

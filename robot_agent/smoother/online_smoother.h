@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <set>
 #include <vector>
 
 #include "robot_agent/filters/odometry_calibration.h"
@@ -60,11 +61,13 @@ class OnlineSmoother : public filters::SlamFilter {
   const KeyframeGraph& Graph() const { return graph_; }
   // Times the pose was searched again and a better one found.
   int Recoveries() const { return recoveries_; }
+  // The front end's tracks joined to the graph's chain of a mover it had lost (JoinRemapped).
+  const std::map<std::uint32_t, std::uint32_t>& Joined() const { return joined_; }
 
  private:
   std::vector<KeyframeGraph::Reading> LabelledReadings(const common::SensorStep& step,
                                                        const filters::FilterEstimate& front) const;
-  void UpdateTracks(const filters::FilterEstimate& front);
+  void UpdateTracks(const filters::FilterEstimate& front, const std::vector<KeyframeGraph::Reading>& readings);
   // Among known candidate kinematics, each mover's (v, w): the front end's candidate until the
   // graph's chain of it has kMinChoiceStates states; then, at every keyframe while the chain is
   // younger than the window, the candidate whose KeyframeGraph::TrialCost is lowest, the one held
@@ -74,6 +77,24 @@ class OnlineSmoother : public filters::SlamFilter {
   static constexpr int kMinChoiceStates = 3;
   static constexpr double kKinematicsSwitchMargin = 9.21;
   void ChooseKinematics(std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers);
+  // Among known candidate kinematics, a graph's chain goes on while the front end does not report
+  // its track as a mover for a while (not confirmed, heading unknown, or dropped) without naming
+  // it static: dropped, the chain's history would be lost, and a chain started again has no
+  // heading to predict by. (With estimated motion a kept chain's model would extrapolate a mover
+  // that turns: there the front end decides.)
+  void KeepChains(const std::set<std::uint32_t>& fixed,
+                  std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers) const;
+  // Among known candidate kinematics, a mover the front end lost and mapped again under a new
+  // track continues the graph's chain of the old one: a moving track without a chain, first
+  // mapped after the newest state of a chain not read now, whose position (re-anchored on the
+  // graph's pose by `shift`) lies within the chi-square gate of cooperation.match_gate_probability
+  // of that chain's prediction (the sum of both covariances), and whose nearest candidate is the
+  // chain's, is joined to the nearest such chain: its model goes to that chain's track, and its
+  // readings are labelled with it from then on (joined_). With known kinematics the prediction
+  // across the gap is as good as the model, and the motion link keeps what the chain knew.
+  void JoinRemapped(const filters::FilterEstimate& front, const common::Pose2& shift,
+                    const std::vector<KeyframeGraph::Reading>& readings,
+                    std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers);
   filters::MapLandmark FrontLandmark(std::uint32_t track) const;
   std::vector<filters::MapLandmark> GraphLandmarks(int step) const;
   std::vector<filters::MapLandmark> OwnLandmarks(int step) const;
@@ -108,7 +129,8 @@ class OnlineSmoother : public filters::SlamFilter {
   int recoveries_ = 0;
   PeerLandmarks peers_;
   MoverMemory movers_;
-  std::map<std::uint32_t, int> kinematics_;  // per moving track: the candidate the graph uses
+  std::map<std::uint32_t, int> kinematics_;        // per moving track: the candidate the graph uses
+  std::map<std::uint32_t, std::uint32_t> joined_;  // a front end's track -> the graph's chain it continues
 };
 
 }  // namespace mrslam::robot_agent::smoother

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -248,6 +249,87 @@ TEST(OnlineSmoother, AMoversKnownKinematicsAreTheOnesItsReadingsSupport) {
   }
   EXPECT_GE(right, 10);
   EXPECT_EQ(wrong, 0);
+}
+
+// The true landmark nearest to where a reading puts its point from the robot's true pose.
+int TrueLandmarkOf(const common::GroundTruth& truth, const common::LandmarkDetection& z) {
+  const Eigen::Vector2d p = common::PointFromRangeBearing(truth.robots.at(0).pose, {z.range_m, z.bearing_rad});
+  const auto nearest =
+      std::min_element(truth.landmarks.begin(), truth.landmarks.end(), [&](const auto& a, const auto& b) {
+        return (a.pose.Translation() - p).norm() < (b.pose.Translation() - p).norm();
+      });
+  return static_cast<int>(nearest - truth.landmarks.begin());
+}
+
+TEST(OnlineSmoother, AMoverMappedAgainUnderANewTrackContinuesTheChainOfTheSameLandmark) {
+  // Paper A's world, r1 alone, seeds in which the front end loses a mover and maps it again: the
+  // new track is joined to the graph's chain of the old one, and the readings of both tracks are
+  // of the same true landmark (each reading's: the one nearest its point from the true pose).
+  int joins = 0;
+  for (const int seed : {17, 26, 48}) {
+    const auto o =
+        common::LoadScenario(Config("paper_two_robots.yaml"), {"seed=" + std::to_string(seed), "filter.type=smoother"});
+    const auto source = world_sim::MakeStepSource(o);
+    OnlineSmoother smoother(common::AgentOptionsFor(o, "r1"), o.seed);
+    std::map<std::uint32_t, std::map<int, int>> landmarks_of_track;  // readings per true landmark
+    for (int k = 0; k < o.run.steps; ++k) {
+      const common::SensorStep step = source->Step().at(0);
+      smoother.Process(step);
+      const std::vector<std::uint32_t>& tracks = smoother.Estimate().detection_tracks;
+      for (std::size_t i = 0; i < step.lidar.landmarks.size() && i < tracks.size(); ++i) {
+        if (tracks[i] != 0) ++landmarks_of_track[tracks[i]][TrueLandmarkOf(source->Truth(), step.lidar.landmarks[i])];
+      }
+    }
+    const auto most_read = [&](std::uint32_t track) {
+      const auto& counts = landmarks_of_track[track];
+      return std::max_element(counts.begin(), counts.end(),
+                              [](const auto& a, const auto& b) { return a.second < b.second; })
+          ->first;
+    };
+    for (const auto& [track, chain] : smoother.Joined()) {
+      ASSERT_FALSE(landmarks_of_track[track].empty()) << seed;
+      ASSERT_FALSE(landmarks_of_track[chain].empty()) << seed;
+      EXPECT_EQ(most_read(track), most_read(chain)) << "seed " << seed << ": track " << track << " joined to " << chain;
+      EXPECT_EQ(smoother.Graph().ChainStates(track), 0) << seed;
+      ++joins;
+    }
+  }
+  EXPECT_GE(joins, 3);
+}
+
+TEST(OnlineSmoother, AMoversChainIsKeptWhileTheFrontEndDoesNotReportIt) {
+  // Paper A's world, seeds 1..10, each robot alone: a moving landmark's chain in the graph is not
+  // dropped within ten steps of its last reading unless the map names the track static, also
+  // while the front end, for a while, does not report the track as a mover.
+  int checks = 0;
+  for (int seed = 1; seed <= 10; ++seed) {
+    const auto o =
+        common::LoadScenario(Config("paper_two_robots.yaml"), {"seed=" + std::to_string(seed), "filter.type=smoother"});
+    for (std::size_t robot = 0; robot < o.robots.size(); ++robot) {
+      OnlineSmoother smoother(common::AgentOptionsFor(o, o.robots[robot].id), o.seed);
+      const auto source = world_sim::MakeStepSource(o);
+      std::map<std::uint32_t, int> last_read;
+      std::vector<std::uint32_t> chains;  // tracks with a chain after the step before
+      for (int k = 1; k <= o.run.steps; ++k) {
+        smoother.Process(source->Step().at(robot));
+        const filters::FilterEstimate e = smoother.Estimate();
+        for (const std::uint32_t track : chains) {
+          const bool named_static = std::any_of(e.landmarks.begin(), e.landmarks.end(), [&](const auto& l) {
+            return l.track_id == track && l.motion == filters::LandmarkMotionKind::kStatic;
+          });
+          if (named_static || k - last_read[track] > 10) continue;
+          EXPECT_GT(smoother.Graph().ChainStates(track), 0) << "seed " << seed << " robot " << robot << " step " << k;
+          ++checks;
+        }
+        for (const std::uint32_t track : e.detection_tracks) {
+          if (track != 0) last_read[track] = k;
+        }
+        chains.clear();
+        for (const auto& m : smoother.Graph().Movers()) chains.push_back(m.track);
+      }
+    }
+  }
+  EXPECT_GT(checks, 50);
 }
 
 }  // namespace
