@@ -9,6 +9,7 @@
 #include "common/gaussian.h"
 #include "common/se2.h"
 #include "robot_agent/filters/fastslam.h"
+#include "robot_agent/filters/map_fusion.h"
 
 namespace mrslam::robot_agent::smoother {
 namespace {
@@ -96,15 +97,15 @@ void OnlineSmoother::JoinRemapped(const FilterEstimate& front, const Pose2& shif
                                   std::map<std::uint32_t, KeyframeGraph::MoverModel>* movers) {
   std::set<std::uint32_t> read_now;
   for (const auto& r : readings) read_now.insert(r.track);
-  const Eigen::Matrix2d rot = common::ComposeJacobianRight(shift, {}).topLeftCorner<2, 2>();
   const double gate_d2 = common::ChiSquare2Quantile(options_.cooperation.match_gate_probability);
   const auto& candidates = options_.filter.known_kinematics;
   const std::vector<KeyframeGraph::Mover> chains = graph_.Movers();
   for (const MapLandmark& l : front.landmarks) {
     const auto model = movers->find(l.track_id);
     if (model == movers->end() || joined_.count(l.track_id) > 0 || graph_.ChainStates(l.track_id) > 0) continue;
-    const Eigen::Vector2d p = common::Compose(shift, Pose2::FromVector(l.mean)).Translation();
-    const Eigen::Matrix2d p_cov = rot * l.covariance.topLeftCorner<2, 2>() * rot.transpose();
+    const MapLandmark here = filters::TransformLandmark(l, shift, Eigen::Matrix3d::Zero());
+    const Eigen::Vector2d p = here.mean.head<2>();
+    const Eigen::Matrix2d p_cov = here.covariance.topLeftCorner<2, 2>();
     const int candidate = filters::NearestKnownKinematics(candidates, model->second.v_mps, model->second.w_radps);
     double best = gate_d2;
     std::uint32_t chain = 0;
@@ -369,15 +370,9 @@ std::vector<MapLandmark> OnlineSmoother::OwnLandmarks(int step) const {
   std::set<std::uint32_t> in_graph;
   for (const MapLandmark& l : out) in_graph.insert(l.track_id);
   const Pose2 shift = common::Compose(graph_.Pose(), common::Inverse(front_.pose));
-  const Eigen::Matrix2d rot = common::ComposeJacobianRight(shift, {}).topLeftCorner<2, 2>();
   for (const MapLandmark& l : front_.landmarks) {
     if (in_graph.count(l.track_id) > 0 || joined_.count(l.track_id) > 0) continue;
-    MapLandmark m = l;
-    m.mean = common::Compose(shift, Pose2::FromVector(l.mean)).Vector();
-    m.covariance.topLeftCorner<2, 2>() = rot * l.covariance.topLeftCorner<2, 2>() * rot.transpose();
-    m.covariance.block<2, 1>(0, 2) = rot * l.covariance.block<2, 1>(0, 2);
-    m.covariance.block<1, 2>(2, 0) = m.covariance.block<2, 1>(0, 2).transpose();
-    out.push_back(m);
+    out.push_back(filters::TransformLandmark(l, shift, Eigen::Matrix3d::Zero()));
   }
   return out;
 }

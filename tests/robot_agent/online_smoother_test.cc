@@ -251,9 +251,9 @@ TEST(OnlineSmoother, AMoversKnownKinematicsAreTheOnesItsReadingsSupport) {
   EXPECT_EQ(wrong, 0);
 }
 
-// The true landmark nearest to where a reading puts its point from the robot's true pose.
-int TrueLandmarkOf(const common::GroundTruth& truth, const common::LandmarkDetection& z) {
-  const Eigen::Vector2d p = common::PointFromRangeBearing(truth.robots.at(0).pose, {z.range_m, z.bearing_rad});
+// The true landmark nearest to where a reading of robot `robot` puts its point from its true pose.
+int TrueLandmarkOf(const common::GroundTruth& truth, std::size_t robot, const common::LandmarkDetection& z) {
+  const Eigen::Vector2d p = common::PointFromRangeBearing(truth.robots.at(robot).pose, {z.range_m, z.bearing_rad});
   const auto nearest =
       std::min_element(truth.landmarks.begin(), truth.landmarks.end(), [&](const auto& a, const auto& b) {
         return (a.pose.Translation() - p).norm() < (b.pose.Translation() - p).norm();
@@ -277,7 +277,8 @@ TEST(OnlineSmoother, AMoverMappedAgainUnderANewTrackContinuesTheChainOfTheSameLa
       smoother.Process(step);
       const std::vector<std::uint32_t>& tracks = smoother.Estimate().detection_tracks;
       for (std::size_t i = 0; i < step.lidar.landmarks.size() && i < tracks.size(); ++i) {
-        if (tracks[i] != 0) ++landmarks_of_track[tracks[i]][TrueLandmarkOf(source->Truth(), step.lidar.landmarks[i])];
+        if (tracks[i] != 0)
+          ++landmarks_of_track[tracks[i]][TrueLandmarkOf(source->Truth(), 0, step.lidar.landmarks[i])];
       }
     }
     const auto most_read = [&](std::uint32_t track) {
