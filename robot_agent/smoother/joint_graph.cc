@@ -365,21 +365,31 @@ void JointGraph::Solve(bool to_convergence) {
     Activate(horizon);
     problem.cols = cols_;
     const bool last = to_convergence && horizon == last_step_;
-    // The last horizon to convergence: a solution independent of the way to it, to about 1e-7.
-    problem.min_step = last ? 1e-9 : 1e-7;
-    problem.min_relative_decrease = last ? 1e-14 : 1e-6;
-    for (int round = 0; round < (last ? kRounds : 1); ++round) {
-      Factorization solver;
-      LevenbergMarquardt(problem, last ? kIterations : kHorizonIterations, kRidge, &solver);
-      if (!UpdateInliers()) break;
+    // The last horizon: loosely while the gate's decisions change, then to convergence (a
+    // solution independent of the way to it, to about 1e-7), again while they change.
+    const int rounds = last ? kRounds : 1;
+    bool tight = false;
+    for (int round = 0; round < rounds; ++round) {
+      tight = last && (tight || round == rounds - 1);
+      problem.min_step = tight ? 1e-9 : 1e-7;
+      problem.min_relative_decrease = tight ? 1e-14 : 1e-6;
+      auto solver = std::make_shared<Factorization>();
+      const LmResult result =
+          LevenbergMarquardt(problem, last ? kIterations : kHorizonIterations, kRidge, solver.get());
+      const bool changed = UpdateInliers();
+      information_ = result.factorized && result.factorized_lambda <= kUsableDamping && !changed ? solver : nullptr;
+      if (!changed && (tight || !last)) break;
+      tight = tight || !changed;
     }
     if (horizon == last_step_) break;
   }
   solved_to_ = last_step_;
-  Eigen::SparseMatrix<double> identity(cols_, cols_);
-  identity.setIdentity();
-  information_.compute(Equations(true).Matrix() + kRidge * identity);
-  information_ok_ = information_.info() == Eigen::Success;
+  if (information_ == nullptr) {
+    Eigen::SparseMatrix<double> identity(cols_, cols_);
+    identity.setIdentity();
+    auto fresh = std::make_shared<Factorization>(Equations(true).Matrix() + kRidge * identity);
+    if (fresh->info() == Eigen::Success) information_ = std::move(fresh);
+  }
 }
 
 void JointGraph::WarmStart(const JointGraph& previous) {
@@ -424,10 +434,11 @@ Pose2 JointGraph::Frame(int r) const {
 Eigen::Matrix3d JointGraph::FrameCovariance(int r) const {
   const int col = PoseCol(r, 0);
   if (col < 0) return Eigen::Matrix3d::Zero();
-  if (!robots_.at(r).placed || !information_ok_) throw std::logic_error("no covariance: solve a placed robot first");
+  if (!robots_.at(r).placed || information_ == nullptr)
+    throw std::logic_error("no covariance: solve a placed robot first");
   Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(cols_, 3);
   for (int i = 0; i < 3; ++i) unit(col + i, i) = 1.0;
-  const Eigen::Matrix3d marginal = information_.solve(unit).middleRows<3>(col);
+  const Eigen::Matrix3d marginal = information_->solve(unit).middleRows<3>(col);
   const Eigen::Matrix3d j =
       common::ComposeJacobianLeft(robots_[r].keyframes.front().pose, common::Inverse(robots_[r].first_pose));
   return j * marginal * j.transpose();

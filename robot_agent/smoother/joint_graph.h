@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -49,10 +50,10 @@ namespace mrslam::robot_agent::smoother {
 // * a reading of robot q by robot r at step t: the same residual with q's position at t as the
 //   point, so it ties x^r_t and x^q_t.
 // Solved by Levenberg-Marquardt (LevenbergMarquardt) to convergence (at most 100 iterations per
-// round) from the starting values above. A factor enters once: the logs hold each (origin,
-// step) once, whoever relayed it.
-// Frame covariances: the marginal of x^r_0 from the information at the solution, carried through
-// the composition with first_pose_r^-1.
+// round) from the starting values above: loosely (steps below 1e-7) while the gate's decisions
+// change, then tightly (below 1e-9) with them, again while they change. A factor enters once: the logs hold each
+// (origin, step) once, whoever relayed it. Frame covariances: the marginal of x^r_0 from the information at the
+// solution (the last iteration's factorization when it serves), carried through the composition with first_pose_r^-1.
 class JointGraph {
  public:
   // One robot's raw measurements: its steps 1..n in order (steps[i] is step i + 1), each landmark
@@ -142,6 +143,7 @@ class JointGraph {
   int CountReadings(bool only_outliers) const;
 
   static constexpr double kRidge = 1e-9;
+  static constexpr double kUsableDamping = 1e-4;  // the largest LM damping whose factorization serves
   static constexpr double kSolveEveryS = 30.0;
   static constexpr int kRounds = 5, kIterations = 100, kHorizonIterations = 3;
 
@@ -161,8 +163,10 @@ class JointGraph {
   std::vector<int> landmark_col_;
   int cols_ = 0;
   mutable std::size_t triplets_ = 0;  // of the last normal equations built: the next one's reserve
-  Factorization information_;
-  bool information_ok_ = false;
+  // The information matrix at the solution, factorized: the last iteration's (linearized where
+  // it started, a step of negligible length from the solution, damped by at most
+  // kUsableDamping), or afresh when that one cannot serve; null if it failed.
+  std::shared_ptr<const Factorization> information_;
 };
 
 }  // namespace mrslam::robot_agent::smoother
