@@ -85,6 +85,10 @@ class SlamFilter {
   // caches, scratch buffers, spare capacity, allocator overheads and tree nodes' links are left
   // out.
   virtual std::size_t EstimatorBytes() const = 0;
+  // Work whose result serves only the next step (the online smoother's relinearization): a
+  // driver with time between steps does it there, after the step's estimate is out; otherwise
+  // the next step does it first. The same results either way.
+  virtual void Settle() {}
 
   // Landmarks seen moving since the last call (filters that detect motion: ekf_ela); a filter
   // that tracks moving landmarks instead reports none.

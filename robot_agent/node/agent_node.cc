@@ -63,6 +63,7 @@ struct AgentNode::Impl {
   std::uint32_t next_step = 1;
   std::uint32_t restored_step = 0;    // the step of the snapshot restored at the start (0: none)
   std::size_t rendezvous_logged = 0;  // rendezvous() entries logged so far
+  double settle_cpu_s = 0.0;          // of the filter's work between the last step and the next
   // Samples buffered by step until the step is complete, taken only from the simulator.
   cooperation::StepSlots<common::LidarScan> lidar;
   cooperation::StepSlots<common::ImuSamples> imu;
@@ -570,7 +571,8 @@ struct AgentNode::Impl {
     if (cooperation::JointTracker::Enabled(agent)) TrackJoint(k, estimate);
     filters::FilterEstimate published = joint_tracker.Corrected(estimate);
     cooperation.CompleteMap(&published);
-    const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s);
+    const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s + settle_cpu_s);
+    settle_cpu_s = 0.0;
     const auto sent = Send(std::move(outbox));
     LogRendezvous(k, *last);
     msg::Estimate m = ToMsg(published, agent.robot_id, agent.filter.type);
@@ -588,8 +590,16 @@ struct AgentNode::Impl {
     Acknowledge(k, time_s, sent);
     ++counters.steps_processed;
     ++next_step;
-    if (*last) WriteHeldFactors(k);
-    if (!*last) WriteSnapshot(k);
+    if (*last) {
+      WriteHeldFactors(k);
+      return true;
+    }
+    // Between steps (the others step meanwhile): work whose result serves the next step, its CPU
+    // counted in that step's.
+    const double settle_start_s = common::ThreadCpuSeconds();
+    filter->Settle();
+    settle_cpu_s = common::ThreadCpuSeconds() - settle_start_s;
+    WriteSnapshot(k);
     return true;
   }
 };

@@ -61,9 +61,13 @@ Eigen::Matrix3d KeyframeGraph::MoverWhitening(const MoverModel& model, int steps
   return Whitening(AccumulateCovariance(increments, landmark_var_));
 }
 
-void KeyframeGraph::AddMotion(const std::vector<Motion>& segments) { pending_.push_back(segments); }
+void KeyframeGraph::AddMotion(const std::vector<Motion>& segments) {
+  Settle();
+  pending_.push_back(segments);
+}
 
 void KeyframeGraph::AddKeyframe(int step, const std::vector<Reading>& readings) {
+  Settle();
   Keyframe kf;
   kf.step = step;
   kf.pose = common::Compose(window_.back().pose, OdometryIncrement(pending_, correction_));
@@ -98,6 +102,7 @@ void KeyframeGraph::Relinearize() {
 }
 
 void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::uint32_t>& from_to) {
+  Settle();
   for (auto& kf : window_) {
     if (kf.step < from_step) continue;
     for (auto& r : kf.readings) {
@@ -111,6 +116,7 @@ void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::ui
 }
 
 void KeyframeGraph::CutAndMove(int from_step, const Pose2& correction) {
+  Settle();
   bool cut = false;
   for (auto& kf : window_) {
     if (kf.step < from_step || kf.fixed) continue;
@@ -453,7 +459,7 @@ bool KeyframeGraph::UpdateInliers() {
 
 void KeyframeGraph::Io(common::Archive& ar) {
   ar(window_, history_, pending_, landmarks_, static_tracks_, mover_models_, moving_tracks_, movers_, chain_starts_,
-     correction_, prior_, calibration_prior_, pose_correction_cov_, landmark_cov_, mover_cov_);
+     correction_, prior_, calibration_prior_, pose_correction_cov_, landmark_cov_, mover_cov_, relinearize_due_);
   if (!ar.loading()) return;
   if (window_.empty()) throw common::ArchiveError("archive: a keyframe graph without keyframes");
   information_ = nullptr;  // a factorization of the last solve: that solve's own
@@ -495,9 +501,16 @@ std::size_t KeyframeGraph::EstimatorBytes() const {
 }
 
 void KeyframeGraph::Solve() {
+  Settle();
   SolveWithGate();
-  if (relinearize_threshold_ > 0.0 && !history_.empty() && PriorDrift() > relinearize_threshold_) Relinearize();
   ComputeCovariances();
+  relinearize_due_ = relinearize_threshold_ > 0.0 && !history_.empty() && PriorDrift() > relinearize_threshold_;
+}
+
+void KeyframeGraph::Settle() {
+  if (!relinearize_due_) return;
+  relinearize_due_ = false;
+  Relinearize();
 }
 
 void KeyframeGraph::SolveWithGate() {

@@ -106,6 +106,7 @@ class KeyframeGraph {
   // The tracks whose readings are factors: static landmarks, and moving ones with their models;
   // the others' readings wait.
   void SetTracks(std::set<std::uint32_t> static_tracks, const std::map<std::uint32_t, MoverModel>& movers) {
+    Settle();
     static_tracks_ = std::move(static_tracks);
     moving_tracks_.clear();
     for (const auto& [track, model] : movers) {
@@ -121,7 +122,12 @@ class KeyframeGraph {
   // (applied on the left) and cuts the odometry factor into that keyframe: the robot was moved
   // in a way its odometry did not see.
   void CutAndMove(int from_step, const common::Pose2& correction);
+  // Solves the window, then computes the covariances; when the prior's variables have moved
+  // more than relinearize_threshold from where it was linearized, a relinearization is due.
   void Solve();
+  // Does a relinearization that is due (Relinearize): work whose result serves the next step
+  // only, so a driver may do it between steps; every change to the graph does it first.
+  void Settle();
 
   // The newest pose (the last keyframe's composed with the pending motion) and its marginal
   // covariance, the correction's uncertainty included.
@@ -288,6 +294,7 @@ class KeyframeGraph {
   int window_keyframes_;
   int max_iterations_;
   double relinearize_threshold_;
+  bool relinearize_due_ = false;
   double huber_k_, gate_;
   Eigen::Vector3d robot_var_, landmark_var_;
   Eigen::Vector2d z_w_;

@@ -52,6 +52,8 @@ class OnlineSmoother : public filters::SlamFilter {
   // and the graph's (KeyframeGraph::EstimatorBytes): grows by one keyframe's bytes for each
   // keyframe marginalized into the fixed history.
   std::size_t EstimatorBytes() const override;
+  // The graph's relinearization, when due (KeyframeGraph::Settle).
+  void Settle() override { graph_.Settle(); }
   int MergeLandmarks(const std::vector<filters::MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                      double gate_probability, double too_close_m) override;
 
