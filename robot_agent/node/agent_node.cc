@@ -63,7 +63,6 @@ struct AgentNode::Impl {
   std::uint32_t next_step = 1;
   std::uint32_t restored_step = 0;    // the step of the snapshot restored at the start (0: none)
   std::size_t rendezvous_logged = 0;  // rendezvous() entries logged so far
-  double settle_cpu_s = 0.0;          // of the filter's work between the last step and the next
   // Samples buffered by step until the step is complete, taken only from the simulator.
   cooperation::StepSlots<common::LidarScan> lidar;
   cooperation::StepSlots<common::ImuSamples> imu;
@@ -571,8 +570,7 @@ struct AgentNode::Impl {
     if (cooperation::JointTracker::Enabled(agent)) TrackJoint(k, estimate);
     filters::FilterEstimate published = joint_tracker.Corrected(estimate);
     cooperation.CompleteMap(&published);
-    const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s + settle_cpu_s);
-    settle_cpu_s = 0.0;
+    const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s);
     const auto sent = Send(std::move(outbox));
     LogRendezvous(k, *last);
     msg::Estimate m = ToMsg(published, agent.robot_id, agent.filter.type);
@@ -594,11 +592,10 @@ struct AgentNode::Impl {
       WriteHeldFactors(k);
       return true;
     }
-    // Between steps (the others step meanwhile): work whose result serves the next step, its CPU
-    // counted in that step's.
-    const double settle_start_s = common::ThreadCpuSeconds();
+    // Between steps (the others step meanwhile): work whose result serves the next step. Not in
+    // the step's CPU, which is its own processing, from its data to its estimate (the latency
+    // leaves it out); in the run's CPU.
     filter->Settle();
-    settle_cpu_s = common::ThreadCpuSeconds() - settle_start_s;
     WriteSnapshot(k);
     return true;
   }
