@@ -377,7 +377,7 @@ void JointGraph::Solve(bool to_convergence) {
       const LmResult result =
           LevenbergMarquardt(problem, last ? kIterations : kHorizonIterations, kRidge, solver.get());
       const bool changed = UpdateInliers();
-      information_ = result.factorized && result.factorized_lambda <= kUsableDamping && !changed ? solver : nullptr;
+      information_ = result.InformationUsable() && !changed ? solver : nullptr;
       if (!changed && (tight || !last)) break;
       tight = tight || !changed;
     }

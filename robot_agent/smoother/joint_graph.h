@@ -143,7 +143,6 @@ class JointGraph {
   int CountReadings(bool only_outliers) const;
 
   static constexpr double kRidge = 1e-9;
-  static constexpr double kUsableDamping = 1e-4;  // the largest LM damping whose factorization serves
   static constexpr double kSolveEveryS = 30.0;
   static constexpr int kRounds = 5, kIterations = 100, kHorizonIterations = 3;
 
@@ -164,8 +163,8 @@ class JointGraph {
   int cols_ = 0;
   mutable std::size_t triplets_ = 0;  // of the last normal equations built: the next one's reserve
   // The information matrix at the solution, factorized: the last iteration's (linearized where
-  // it started, a step of negligible length from the solution, damped by at most
-  // kUsableDamping), or afresh when that one cannot serve; null if it failed.
+  // it started, a step of negligible length from the solution: LmResult::InformationUsable), or
+  // afresh when that one cannot serve; null if it failed.
   std::shared_ptr<const Factorization> information_;
 };
 

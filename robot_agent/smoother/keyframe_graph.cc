@@ -428,8 +428,7 @@ double KeyframeGraph::SolveOnce() {
   };
   auto solver = std::make_shared<Factorization>();
   const LmResult result = LevenbergMarquardt(problem, max_iterations_, kRidge, solver.get());
-  const bool usable = result.factorized && result.factorized_lambda <= kUsableDamping;
-  information_ = usable ? std::move(solver) : nullptr;
+  information_ = result.InformationUsable() ? std::move(solver) : nullptr;
   information_vars_ = vars;
   return result.cost;
 }

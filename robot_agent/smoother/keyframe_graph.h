@@ -287,8 +287,7 @@ class KeyframeGraph {
   std::shared_ptr<const Factorization> Information(const std::vector<Var>& vars, const Layout& layout) const;
   void ComputeCovariances();
 
-  static constexpr double kRidge = 1e-9;          // added to the information's diagonal
-  static constexpr double kUsableDamping = 1e-4;  // the largest LM damping whose factorization serves
+  static constexpr double kRidge = 1e-9;  // added to the information's diagonal
 
   double dt_s_;
   int window_keyframes_;

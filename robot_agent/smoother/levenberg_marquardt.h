@@ -28,6 +28,10 @@ struct LmResult {
   double cost = 0.0;
   double factorized_lambda = 0.0;  // the damping of the last factorization
   bool factorized = false;         // the last factorization succeeded
+
+  // Whether the last factorization can stand for the information matrix at the solution: it
+  // succeeded, damped by at most 1e-4 (it is linearized where the last iteration started).
+  bool InformationUsable() const { return factorized && factorized_lambda <= 1e-4; }
 };
 
 // Levenberg-Marquardt on the sparse normal equations H = J^T J (+ priors), g = J^T r: at most

@@ -172,7 +172,6 @@ void OnlineSmoother::Process(const common::SensorStep& step) {
 }
 
 void OnlineSmoother::Advance(const common::SensorStep& step) {
-  graph_.Settle();  // before the front end reads the graph
   step_ = static_cast<int>(step.lidar.stamp.step);
   front_end_->Process(step);
   front_ = front_end_->Estimate();
