@@ -231,6 +231,7 @@ void ParseRun(Section& top, ScenarioOptions* o) {
   o->run.mode = run.GetEnum<RunMode>("mode", RunMode::kLockstep,
                                      {{"lockstep", RunMode::kLockstep}, {"realtime", RunMode::kRealtime}});
   o->run.realtime_factor = run.Get("realtime_factor", o->run.realtime_factor);
+  o->run.stagger_robots = run.Get("stagger_robots", o->run.stagger_robots);
   if (o->replay.enabled) {
     // Derived from the replay window; a given run.steps may only shorten it, dt_s must agree.
     const double ratio = o->replay.duration_s / o->replay.step_s;

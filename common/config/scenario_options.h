@@ -29,6 +29,9 @@ enum class RunMode { kLockstep, kRealtime };
 struct RunOptions {
   RunMode mode = RunMode::kLockstep;
   double realtime_factor = 1.0;  // simulated seconds per wall second
+  // Realtime: robot i of n gets its sensor data of a step i / n of a period after the step's
+  // clock (robots whose sensors are not synchronized); false: all at the step's start.
+  bool stagger_robots = true;
   int steps = 100;
   double dt_s = 0.1;
   double ack_timeout_s = 30.0;  // lockstep: an agent silent this long aborts the run

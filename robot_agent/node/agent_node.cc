@@ -283,40 +283,45 @@ struct AgentNode::Impl {
     drop(&in->second.factors);
   }
 
-  template <typename W, typename M>
-  void SendTo(W& writer, const M& message, const std::string& peer, std::map<std::string, std::uint32_t>* counts) {
-    if (!writer.Write(message)) throw AgentError("DDS refused a peer message to " + peer);
-    bytes_sent_to[peer] += M::getCdrSerializedSize(message);
-    ++(*counts)[peer];
+  // Converts and stamps a step's peer messages and counts their bytes as sent (they are
+  // written right after the step's estimate, which reports the count).
+  PeerMessages Prepare(cooperation::PeerOutbox outbox) {
+    PeerMessages out;
+    auto stamp = [&](auto* m) -> const auto& {
+      m->header.sequence = ++sent_sequence[m->header.recipient];
+      return *m;
+    };
+    auto count = [&](const auto& message) {
+      bytes_sent_to[message.recipient_id()] += std::decay_t<decltype(message)>::getCdrSerializedSize(message);
+    };
+    for (auto& m : outbox.measurements) count(out.relative.emplace_back(ToMsg(stamp(&m))));
+    for (auto& m : outbox.maps) {
+      count(out.maps.emplace_back(ToMsg(stamp(&m))));
+      spdlog::info("sent a map snapshot of {} landmarks and a history of {} steps to {}", m.landmarks.size(),
+                   m.history.size(), m.header.recipient);
+    }
+    for (auto& m : outbox.moved) count(out.moved.emplace_back(ToMsg(stamp(&m))));
+    for (auto& m : outbox.factors) count(out.factors.emplace_back(ToMsg(stamp(&m))));
+    return out;
   }
 
-  // Sends the outbox of a step; returns the number of messages per recipient.
-  std::map<std::string, std::uint32_t> Send(cooperation::PeerOutbox outbox) {
+  // Writes a step's peer messages; returns the number of messages per recipient.
+  std::map<std::string, std::uint32_t> Send(const PeerMessages& messages) {
     std::map<std::string, std::uint32_t> counts;
-    auto writers = [&](const std::string& peer) -> PeerWriters& {
+    auto to = [&](const auto& message) -> PeerWriters& {
+      const std::string& peer = message.recipient_id();
+      ++counts[peer];
       auto& w = peers[peer];
       if (!w) w = std::make_unique<PeerWriters>(participant, agent.robot_id, peer, agent.cooperation.share_factors);
       return *w;
     };
-    auto stamp = [&](cooperation::PeerHeader* h) { h->sequence = ++sent_sequence[h->recipient]; };
-    for (auto& m : outbox.measurements) {
-      stamp(&m.header);
-      SendTo(writers(m.header.recipient).relative, ToMsg(m), m.header.recipient, &counts);
-    }
-    for (auto& m : outbox.maps) {
-      stamp(&m.header);
-      SendTo(writers(m.header.recipient).map, ToMsg(m), m.header.recipient, &counts);
-      spdlog::info("sent a map snapshot of {} landmarks and a history of {} steps to {}", m.landmarks.size(),
-                   m.history.size(), m.header.recipient);
-    }
-    for (auto& m : outbox.moved) {
-      stamp(&m.header);
-      SendTo(writers(m.header.recipient).moved, ToMsg(m), m.header.recipient, &counts);
-    }
-    for (auto& m : outbox.factors) {
-      stamp(&m.header);
-      SendTo(*writers(m.header.recipient).factors, ToMsg(m), m.header.recipient, &counts);
-    }
+    auto write = [&](auto& writer, const auto& message) {
+      if (!writer.Write(message)) throw AgentError("DDS refused a peer message to " + message.recipient_id());
+    };
+    for (const auto& m : messages.relative) write(to(m).relative, m);
+    for (const auto& m : messages.maps) write(to(m).map, m);
+    for (const auto& m : messages.moved) write(to(m).moved, m);
+    for (const auto& m : messages.factors) write(*to(m).factors, m);
     return counts;
   }
 
@@ -571,7 +576,7 @@ struct AgentNode::Impl {
     filters::FilterEstimate published = joint_tracker.Corrected(estimate);
     cooperation.CompleteMap(&published);
     const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s);
-    const auto sent = Send(std::move(outbox));
+    const PeerMessages to_peers = Prepare(std::move(outbox));
     LogRendezvous(k, *last);
     msg::Estimate m = ToMsg(published, agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
@@ -585,7 +590,9 @@ struct AgentNode::Impl {
     step_times[k] = time_s;
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));
-    Acknowledge(k, time_s, sent);
+    // The peers' messages after the estimate: they do not delay it (a first message to a peer
+    // creates the writers toward it).
+    Acknowledge(k, time_s, Send(to_peers));
     ++counters.steps_processed;
     ++next_step;
     if (*last) {

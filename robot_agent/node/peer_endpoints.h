@@ -2,6 +2,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
@@ -30,6 +31,15 @@ struct PeerWriters {
   dds::Writer<msg::MapSnapshotPubSubType> map;
   dds::Writer<msg::LandmarkMovedNoticePubSubType> moved;
   std::optional<dds::Writer<msg::FactorBatchPubSubType>> factors;
+};
+
+// A step's peer messages in their DDS form, stamped with their sequence numbers, ready to write
+// (each names its recipient).
+struct PeerMessages {
+  std::vector<msg::RelativeMeasurement> relative;
+  std::vector<msg::MapSnapshot> maps;
+  std::vector<msg::LandmarkMovedNotice> moved;
+  std::vector<msg::FactorBatch> factors;
 };
 
 }  // namespace mrslam::robot_agent

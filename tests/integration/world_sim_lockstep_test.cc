@@ -164,6 +164,61 @@ TEST(WorldSimLockstepTest, EveryTopicEveryStepOnceInOrderWithCoreValues) {
   }
 }
 
+TEST(WorldSimRealtimeTest, StaggeredRobotsGetTheirDataSpreadOverTheStep) {
+  // Realtime, eight robots, 200 ms steps: robot i's data are written at least i/8 of a step
+  // after robot 0's (a clock that is late is never early), in every step.
+  unsetenv("MRSLAM_DOMAIN");
+  constexpr int kRealtimeDomain = 116;
+  constexpr int kRealtimeSteps = 3;
+  constexpr double kPeriodMs = 200.0;
+  const std::string scenario_path = SourcePath("config/swarm_8.yaml");
+  const std::vector<std::string> sets = {"run.mode=realtime", "run.dt_s=0.2", "run.realtime_factor=1"};
+  const auto scenario = common::LoadScenario(scenario_path, sets);
+  const testing::TempDir temp_dir("mrslam-staggered");
+  dds::Participant participant({kRealtimeDomain, "staggered_test", false});
+  std::vector<std::unique_ptr<dds::Reader<msg::OdometryPubSubType>>> odometry;
+  std::vector<std::unique_ptr<dds::Writer<msg::StepAckPubSubType>>> acks;
+  for (const auto& r : scenario.robots) {
+    odometry.push_back(std::make_unique<dds::Reader<msg::OdometryPubSubType>>(participant, dds::OdometryTopic(r.id)));
+    acks.push_back(std::make_unique<dds::Writer<msg::StepAckPubSubType>>(participant, dds::AckTopic(r.id)));
+  }
+  std::vector<std::string> argv = {BinPath("world_sim"),
+                                   "--scenario",
+                                   scenario_path,
+                                   "--domain",
+                                   std::to_string(kRealtimeDomain),
+                                   "--steps",
+                                   std::to_string(kRealtimeSteps)};
+  for (const auto& set : sets) argv.insert(argv.end(), {"--set", set});
+  ChildProcess sim(argv, temp_dir.path() + "/world_sim.log");
+  ASSERT_TRUE(sim.started());
+  for (std::size_t i = 0; i < acks.size(); ++i) {
+    msg::StepAck a;
+    a.stamp().robot_id(scenario.robots[i].id);
+    ASSERT_TRUE(acks[i]->Write(a));  // ready
+  }
+  // written[i][k - 1]: when robot i's odometry of step k was written.
+  std::vector<std::vector<std::int64_t>> written(odometry.size());
+  for (std::size_t i = 0; i < odometry.size(); ++i) {
+    msg::Odometry o;
+    dds::SampleTimes times;
+    while (written[i].size() < kRealtimeSteps && odometry[i]->Take(&o, seconds(20), nullptr, &times)) {
+      written[i].push_back(times.written_ns);
+    }
+    ASSERT_EQ(written[i].size(), static_cast<std::size_t>(kRealtimeSteps))
+        << testing::ReadFile(temp_dir.path() + "/world_sim.log");
+  }
+  ASSERT_EQ(sim.WaitExit(seconds(30)), std::optional<int>(0)) << testing::ReadFile(temp_dir.path() + "/world_sim.log");
+  const double n = static_cast<double>(odometry.size());
+  for (int k = 0; k < kRealtimeSteps; ++k) {
+    for (std::size_t i = 1; i < odometry.size(); ++i) {
+      const double after_ms = static_cast<double>(written[i][k] - written[0][k]) * 1e-6;
+      // Robot 0's data leave right after the step's clock; allow it 5 ms of lateness.
+      EXPECT_GE(after_ms, static_cast<double>(i) / n * kPeriodMs - 5.0) << "robot " << i << " step " << k + 1;
+    }
+  }
+}
+
 TEST(WorldSimLockstepTest, SilentAgentMakesTheSimulatorExitNamingIt) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-silent");

@@ -64,6 +64,8 @@ TEST(DeliveryTimingTest, SensorDataTakenAfterItsOwnStepsEstimateStillJudgesTheOn
 
 TEST(DeliveryTimingTest, AnEstimateBeforeItsStepsTruthIsTimedWhenTheTruthComes) {
   DeliveryTiming timing({"r1", "r2"});
+  timing.SensorWritten("r1", 1, kStart - 50'000);
+  timing.SensorWritten("r2", 1, kStart - 40'000);
   timing.EstimateDelivered("r1", 1, kStart + 900'000, kStart + 1'000'000, 0.5);
   EXPECT_EQ(timing.Summary("r1").timed_steps, 0U);
   timing.StepWritten(1, kStart);
@@ -72,6 +74,35 @@ TEST(DeliveryTimingTest, AnEstimateBeforeItsStepsTruthIsTimedWhenTheTruthComes) 
   // r2 has not reported step 1 yet: its time is still held for r2.
   timing.EstimateDelivered("r2", 1, kStart + 1'900'000, kStart + 2'000'000, 0.25);
   EXPECT_NEAR(timing.Summary("r2").latency_us_median, 1750.0, 1e-6);
+}
+
+TEST(DeliveryTimingTest, ARobotWhoseDataComeLaterInTheStepIsTimedFromItsData) {
+  // Staggered: the step's truth and clock at kStart, r1's data then, r2's 50 ms later.
+  DeliveryTiming timing({"r1", "r2"});
+  timing.StepWritten(1, kStart);
+  timing.SensorWritten("r1", 1, kStart + 20'000);
+  timing.SensorWritten("r2", 1, kStart + 50'000'000);
+  timing.EstimateDelivered("r1", 1, kStart + 1'900'000, kStart + 2'000'000, 1.5);
+  timing.EstimateDelivered("r2", 1, kStart + 51'900'000, kStart + 52'000'000, 1.5);
+  EXPECT_NEAR(timing.Summary("r1").latency_us_median, 480.0, 1e-6);  // 2000 - 20 - 1500 us
+  EXPECT_NEAR(timing.Summary("r2").latency_us_median, 500.0, 1e-6);  // 52000 - 50000 - 1500 us
+}
+
+TEST(DeliveryTimingTest, AnEstimateTakenBeforeItsOwnDataIsTimedWhenTheDataCome) {
+  // Taken in batches: each robot's estimate of step k before its odometry of step k; every
+  // robot is past step k (so the step's truth must still be held for the latency).
+  DeliveryTiming timing({"r1", "r2"});
+  for (int k = 1; k <= 5; ++k) {
+    const std::int64_t step_ns = kStart + k * kStepNs;
+    timing.StepWritten(k, step_ns);
+    for (const char* id : {"r1", "r2"}) timing.EstimateDelivered(id, k, step_ns + 900'000, step_ns + 1'000'000, 0.6);
+    timing.SensorWritten("r1", k, step_ns - 30'000);
+    timing.SensorWritten("r2", k, step_ns + 100'000);
+  }
+  EXPECT_EQ(timing.Summary("r1").timed_steps, 5U);
+  EXPECT_NEAR(timing.Summary("r1").latency_us_median, 400.0, 1e-6);  // from the truth, written later
+  EXPECT_NEAR(timing.Summary("r2").latency_us_median, 300.0, 1e-6);  // from its data
+  EXPECT_LE(timing.Held(), 3U);  // step 5's truth and the estimates awaiting step 6's odometry
 }
 
 TEST(DeliveryTimingTest, UnknownTimesLeaveTheStepOut) {

@@ -20,8 +20,9 @@ struct DeliverySummary {
 // Takes when world_sim wrote each step and each robot's sensor data, and when each estimate was
 // written by its agent and received here; reports per robot:
 // - latency: received(estimate of step k) - written(step k) - the agent's processing time of the
-//   step, where written(step k) is world_sim's write of the step's truth, which it writes
-//   immediately before the step's clock (so the figure errs high by that gap, microseconds);
+//   step, where written(step k) is the later of world_sim's write of the step's truth, which it
+//   writes immediately before the step's clock, and of the robot's first sensor message of the
+//   step, its odometry (each errs high by the gap to the clock or to the lidar, microseconds);
 // - late estimates: estimates of step k written after world_sim wrote step k + 1's first sensor
 //   message for that robot (its odometry), i.e. after the next step's data started to flow.
 // Times are nanoseconds since the Unix epoch from the system clock, comparable on one host; 0
@@ -45,6 +46,7 @@ class DeliveryTiming {
   struct RobotTiming {
     std::map<std::uint32_t, std::int64_t> sensor_written;    // awaiting the previous step's estimate
     std::map<std::uint32_t, std::int64_t> estimate_written;  // awaiting the next step's sensor data
+    std::map<std::uint32_t, std::int64_t> data_written;      // the step's odometry, awaiting its estimate
     std::map<std::uint32_t, std::int64_t> arrival_ns;        // received - processing, awaiting the step
     bool any_estimate = false;
     std::uint32_t newest_estimate = 0;
@@ -53,6 +55,8 @@ class DeliveryTiming {
   };
   // Judges whether the estimate of step k was late, if both times are known; lets them go.
   static void JudgeLate(RobotTiming* robot, std::uint32_t step);
+  // Adds the latency of the robot's step k once its estimate, its data and the step are in.
+  void TimeStep(RobotTiming* robot, std::uint32_t step);
   // Lets go of the steps' times every robot is past.
   void Prune();
 

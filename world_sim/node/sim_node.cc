@@ -129,14 +129,17 @@ struct SimNode::Impl {
     return true;
   }
 
-  void Publish(const std::vector<common::SensorStep>& samples, const std::vector<msg::PeerDelivery>& deliveries) {
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-      const auto& id = scenario.robots[i].id;
-      auto& w = writers.at(id);
-      WriteOrThrow(*w.odometry, dds::ToMsg(samples[i].odometry), id + " odometry");
-      WriteOrThrow(*w.imu, dds::ToMsg(samples[i].imu), id + " imu");
-      WriteOrThrow(*w.lidar, dds::ToMsg(samples[i].lidar), id + " lidar");
-    }
+  // Robot i's odometry, IMU and lidar of the step.
+  void PublishRobot(std::size_t i, const common::SensorStep& sample) {
+    const auto& id = scenario.robots[i].id;
+    auto& w = writers.at(id);
+    WriteOrThrow(*w.odometry, dds::ToMsg(sample.odometry), id + " odometry");
+    WriteOrThrow(*w.imu, dds::ToMsg(sample.imu), id + " imu");
+    WriteOrThrow(*w.lidar, dds::ToMsg(sample.lidar), id + " lidar");
+  }
+
+  // The step's truth and clock.
+  void PublishStep(const std::vector<msg::PeerDelivery>& deliveries) {
     WriteOrThrow(*truth, dds::ToMsg(world.Truth()), "ground truth");
     msg::StepClock c;
     c.stamp().robot_id("world");
@@ -146,6 +149,34 @@ struct SimNode::Impl {
     c.last_step(static_cast<int>(world.step()) == scenario.run.steps);
     c.peer_deliveries(deliveries);
     WriteOrThrow(*clock, c, "step clock");
+  }
+
+  // Every robot's sensor data, then the step's truth and clock.
+  void Publish(const std::vector<common::SensorStep>& samples, const std::vector<msg::PeerDelivery>& deliveries) {
+    for (std::size_t i = 0; i < samples.size(); ++i) PublishRobot(i, samples[i]);
+    PublishStep(deliveries);
+  }
+
+  // The step's truth and clock at `start`, then robot i's sensor data at start + i / n of the
+  // period (robots whose sensors are not synchronized). False when stopped.
+  bool PublishStaggered(const std::vector<common::SensorStep>& samples, Clock::time_point start, Clock::duration period,
+                        const std::atomic<bool>& stop) {
+    PublishStep({});
+    const auto n = static_cast<Clock::rep>(samples.size());
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      if (!SleepUntil(start + period * static_cast<Clock::rep>(i) / n, stop)) return false;
+      PublishRobot(i, samples[i]);
+    }
+    return true;
+  }
+
+  // Sleeps until `due`, looking at `stop` every 50 ms; false when stopped.
+  static bool SleepUntil(Clock::time_point due, const std::atomic<bool>& stop) {
+    while (Clock::now() < due) {
+      if (stop) return false;
+      std::this_thread::sleep_until(std::min(due, Clock::now() + milliseconds(50)));
+    }
+    return !stop;
   }
 };
 
@@ -173,22 +204,24 @@ bool SimNode::Run(const std::atomic<bool>& stop) {
   std::vector<msg::PeerDelivery> deliveries;
   std::vector<double> ack_latency_ms;
   int last_percent = -1;
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(s.scenario.run.dt_s / s.scenario.run.realtime_factor));
+  const bool staggered = !lockstep && s.scenario.run.stagger_robots;
   for (int k = 1; k <= steps; ++k) {
     if (stop) return false;
     const auto samples = s.world.Step();
     const auto published = Clock::now();
-    s.Publish(samples, deliveries);
+    if (staggered) {
+      if (!s.PublishStaggered(samples, start + period * (k - 1), period, stop)) return false;
+    } else {
+      s.Publish(samples, deliveries);
+    }
     deliveries.clear();
     if (lockstep) {
       if (!s.WaitForAcks(static_cast<std::uint32_t>(k), stop, &deliveries)) return false;
       ack_latency_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - published).count());
-    } else {
-      const auto due = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                                   k * s.scenario.run.dt_s / s.scenario.run.realtime_factor));
-      while (Clock::now() < due) {
-        if (stop) return false;
-        std::this_thread::sleep_until(std::min(due, Clock::now() + milliseconds(50)));
-      }
+    } else if (!s.SleepUntil(start + period * k, stop)) {
+      return false;
     }
     const int percent = 100 * k / steps;
     if (percent / 10 != last_percent / 10) {
