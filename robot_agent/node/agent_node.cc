@@ -201,16 +201,25 @@ struct AgentNode::Impl {
                     h.step, h.sender);
       return;
     }
-    if (h.step + 1 < next_step) {
-      Reject(Rejection::kStale, "peer message of step " + std::to_string(h.step) + " from " + h.sender);
-      return;
-    }
     if (h.step > next_step && h.step - next_step > options.horizon_steps) {
       Reject(Rejection::kBeyondHorizon, "peer message of step " + std::to_string(h.step) + " from " + h.sender);
       return;
     }
-    received[{h.sender, h.step}].insert(h.sequence);
-    (inbox[h.step].*list).push_back(std::move(message));
+    // Applied at the start of the step after its own (the messages of step k at step k + 1).
+    std::uint32_t step = h.step;
+    if (h.step + 1 < next_step) {
+      // Its step is past: stale in lockstep (the agent waited for what the clock announced);
+      // in realtime late, applied at the next step (the cooperation still rejects one older
+      // than a message of the same kind it applied from that sender).
+      if (options.lockstep) {
+        Reject(Rejection::kStale, "peer message of step " + std::to_string(h.step) + " from " + h.sender);
+        return;
+      }
+      ++counters.peer_messages_late;
+      step = next_step - 1;
+    }
+    received[{h.sender, step}].insert(h.sequence);
+    (inbox[step].*list).push_back(std::move(message));
   }
 
   // A message this agent already has: a peer that was restarted sends again, with the same
@@ -446,7 +455,7 @@ struct AgentNode::Impl {
   // applied yet included), the cooperation's and the filter's.
   void Io(common::Archive& ar) {
     ar(next_step, step_times, inbox, received, applied_sequence, sent_sequence, counters.steps_processed,
-       counters.rejected.by_kind, rendezvous_logged, bytes_sent_to, bytes_received_from);
+       counters.rejected.by_kind, counters.peer_messages_late, rendezvous_logged, bytes_sent_to, bytes_received_from);
     cooperation.Io(ar);
     joint_tracker.Io(ar);
     filter->Io(ar);
@@ -586,6 +595,7 @@ struct AgentNode::Impl {
     m.step_cpu_ms(step_cpu_ms);
     m.peer_bytes_sent(Total(bytes_sent_to));
     m.peer_bytes_received(Total(bytes_received_from));
+    m.peer_messages_late(counters.peer_messages_late);
     m.estimator_bytes(filter->EstimatorBytes() + cooperation.exchange().HeldBytes() + cooperation.streamed_bytes());
     step_times[k] = time_s;
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
@@ -642,8 +652,8 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
       progressed = true;
       if (last) {
         a.Flush();
-        spdlog::info("agent {} done: {} steps, rejected: {}", a.agent.robot_id, a.counters.steps_processed,
-                     a.counters.rejected.Describe());
+        spdlog::info("agent {} done: {} steps, rejected: {}, peer messages applied a step late: {}", a.agent.robot_id,
+                     a.counters.steps_processed, a.counters.rejected.Describe(), a.counters.peer_messages_late);
         if (a.counters.rejected.Failing() > 0 && !a.options.allow_rejected) {
           throw AgentError("agent " + a.agent.robot_id + " rejected " + a.counters.rejected.Describe() +
                            " input(s): the run's numbers cannot be trusted (--allow-rejected accepts them)");

@@ -49,6 +49,8 @@ struct AgentNodeOptions {
 struct AgentCounters {
   int steps_processed = 0;
   cooperation::RejectionCounts rejected;
+  // Realtime: peer messages of a step already past, applied at the next step.
+  std::uint32_t peer_messages_late = 0;
 };
 
 // A robot agent's DDS node: reads only its own robot's lidar, IMU and odometry topics and the

@@ -28,6 +28,8 @@ constexpr int kAllowedDomain = 146;
 constexpr int kForeignDomain = 147;
 constexpr int kPeerSenderDomain = 144;
 constexpr int kUnannouncedDomain = 148;
+constexpr int kLateLockstepDomain = 103;
+constexpr int kLateRealtimeDomain = 104;
 constexpr std::uint32_t kSteps = 3;
 constexpr double kDt = 0.65;
 
@@ -114,6 +116,45 @@ TEST(AgentRejectsTest, ScansFromAnotherParticipantAreNotTakenAndFailTheRun) {
 
 // A peer message on r2's topic into r1 whose header names another sender (r3) is not taken: it
 // counts as malformed and fails the run.
+// A peer message of step 1 that comes after the agent processed step 3: in lockstep stale
+// (rejected and counted, the run goes on: the agent waited for what the clock announced), in
+// realtime late (applied at the next step and counted as late). Returns the agent's log.
+std::string RunWithALatePeerMessage(int domain, const std::string& mode, const std::string& dir) {
+  constexpr std::uint32_t kLateSteps = 5;
+  dds::Participant participant({domain, "fake_sim_and_r2", false});
+  FakeSimulator sim(participant, "r1", kLateSteps, kDt);
+  dds::Writer<msg::RelativeMeasurementPubSubType> from_r2(participant, dds::PeerTopic("r1", "r2", "relative"));
+  ChildProcess agent(testing::R1AgentCommand(domain, {"--particles", "50", "--set", "run.mode=" + mode}),
+                     dir + "/agent.log");
+  EXPECT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(dir + "/agent.log");
+  for (std::uint32_t k = 1; k <= kLateSteps; ++k) {
+    if (k == 4) {
+      robot_agent::cooperation::RelativeMeasurement late;
+      late.header = {"r2", "r1", 1, kDt, 1};
+      late.range_m = 3.0;
+      late.sender_covariance = Eigen::Matrix3d::Identity() * 1e-4;
+      EXPECT_TRUE(from_r2.Write(robot_agent::ToMsg(late)));
+      EXPECT_TRUE(from_r2.WaitForAcknowledgments(seconds(20)));
+    }
+    EXPECT_TRUE(sim.PublishStep(k, OneLandmark(false), 1.0, 0.2));
+    EXPECT_GE(sim.WaitAck(k), 0) << testing::ReadFile(dir + "/agent.log");
+  }
+  EXPECT_EQ(agent.WaitExit(seconds(20)), std::optional<int>(0)) << testing::ReadFile(dir + "/agent.log");
+  return testing::ReadFile(dir + "/agent.log");
+}
+
+TEST(AgentRejectsTest, APeerMessageOfAPastStepIsStaleInLockstepAndAppliedLateInRealtime) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir lockstep_dir("mrslam-late");
+  const std::string lockstep = RunWithALatePeerMessage(kLateLockstepDomain, "lockstep", lockstep_dir.path());
+  EXPECT_NE(lockstep.find("rejected (stale): peer message of step 1 from r2"), std::string::npos) << lockstep;
+  EXPECT_NE(lockstep.find("rejected: 1 stale, peer messages applied a step late: 0"), std::string::npos) << lockstep;
+  const testing::TempDir realtime_dir("mrslam-late");
+  const std::string realtime = RunWithALatePeerMessage(kLateRealtimeDomain, "realtime", realtime_dir.path());
+  EXPECT_EQ(realtime.find("rejected (stale)"), std::string::npos) << realtime;
+  EXPECT_NE(realtime.find("peer messages applied a step late: 1"), std::string::npos) << realtime;
+}
+
 TEST(AgentRejectsTest, PeerMessageNamingAnotherSenderThanItsTopicIsMalformed) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-rejects");

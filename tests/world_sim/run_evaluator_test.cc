@@ -55,6 +55,7 @@ class RunEvaluatorTest : public ::testing::Test {
       r1.frames_known = r1_frames_known;
       r1.data_held = r1_data_held;
       r1.rejected_samples = 2 * step;                  // the agent's running count
+      r1.peer_messages_late = 5 * step;                // the agent's running count
       r1.step_cpu_ms = 1.0 + 2.0 * step;               // 1 and 3 ms
       r1.peer_bytes_sent = std::uint64_t{300} * step;  // the agent's running counts
       r1.peer_bytes_received = std::uint64_t{100} * step;
@@ -110,10 +111,12 @@ TEST_F(RunEvaluatorTest, StaticReachableUnionCompletenessLeavesTheMoversOut) {
   EXPECT_DOUBLE_EQ(s["robots"]["r1"]["static_reachable_union_completeness"].get<double>(), 0.5);
 }
 
-TEST_F(RunEvaluatorTest, RejectedSamplesAreTheAgentsCountAtTheEnd) {
+TEST_F(RunEvaluatorTest, RejectedAndLatePeerMessagesAreTheAgentsCountsAtTheEnd) {
   const nlohmann::json summary = Score({});
   EXPECT_EQ(summary["robots"]["r1"]["rejected_samples"].get<unsigned>(), 2U);
   EXPECT_EQ(summary["robots"]["r2"]["rejected_samples"].get<unsigned>(), 0U);
+  EXPECT_EQ(summary["robots"]["r1"]["peer_messages_late"].get<unsigned>(), 5U);
+  EXPECT_EQ(summary["robots"]["r2"]["peer_messages_late"].get<unsigned>(), 0U);
 }
 
 TEST_F(RunEvaluatorTest, StepCpuTimeIsSummarizedByMedianAndP99) {

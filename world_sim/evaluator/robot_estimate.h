@@ -51,6 +51,8 @@ struct RobotEstimate {
   std::uint64_t estimator_bytes = 0;  // what the agent's estimator holds after the step
   // Serialized bytes of the peer messages the agent has sent and taken in so far.
   std::uint64_t peer_bytes_sent = 0, peer_bytes_received = 0;
+  // Realtime: peer messages the agent took in after their step was past (applied a step late).
+  std::uint32_t peer_messages_late = 0;
   // When the agent wrote the message and the evaluator received it (ns since the Unix epoch;
   // 0 unknown): DeliveryTiming.
   std::int64_t written_ns = 0;

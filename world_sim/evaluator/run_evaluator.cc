@@ -361,6 +361,7 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["frames_known"] = robot.last ? robot.last->frames_known : std::vector<std::string>{};
   r["data_held"] = robot.last ? robot.last->data_held : std::map<std::string, std::uint32_t>{};
   r["rejected_samples"] = robot.last ? robot.last->rejected_samples : 0U;
+  r["peer_messages_late"] = robot.last ? robot.last->peer_messages_late : 0U;
   r["rendezvous"] = robot.last ? ScoreRendezvous(robot.frame, *robot.last) : nlohmann::json::array();
   return r;
 }
