@@ -163,7 +163,8 @@ TEST(PartitionTest, AgentsCutFromEachOtherKeepEstimatingAndExchangeAgainAfterThe
     std::cout << "partition: " << id << ", cut " << cut_s << " s from step ~30 to step ~" << healed_step
               << " (realtime factor " << factor << ", " << steps << " steps): last rendezvous at step " << rendezvous
               << ", last joint transform at step " << joint << ", stale peer messages rejected "
-              << Count(log, "rejected (stale): peer message") << "\n";
+              << Count(log, "rejected (stale): peer message") << ", peer messages applied a step late "
+              << summary["robots"][id]["peer_messages_late"].get<int>() << "\n";
   }
 }
 
