@@ -39,6 +39,15 @@ common::LidarScan OneLandmark(bool with_nan_detection) {
   return scan;
 }
 
+// A well-formed relative measurement of step 1 to r1, its header naming `sender`.
+msg::RelativeMeasurement MeasurementOfStep1(const std::string& sender) {
+  robot_agent::cooperation::RelativeMeasurement m;
+  m.header = {sender, "r1", 1, kDt, 1};
+  m.range_m = 3.0;
+  m.sender_covariance = Eigen::Matrix3d::Identity() * 1e-4;
+  return robot_agent::ToMsg(m);
+}
+
 std::vector<std::string> AgentCommand(int domain, bool allow_rejected) {
   std::vector<std::string> extra = {"--particles", "50"};
   if (allow_rejected) extra.emplace_back("--allow-rejected");
@@ -129,11 +138,7 @@ std::string RunWithALatePeerMessage(int domain, const std::string& mode, const s
   EXPECT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(dir + "/agent.log");
   for (std::uint32_t k = 1; k <= kLateSteps; ++k) {
     if (k == 4) {
-      robot_agent::cooperation::RelativeMeasurement late;
-      late.header = {"r2", "r1", 1, kDt, 1};
-      late.range_m = 3.0;
-      late.sender_covariance = Eigen::Matrix3d::Identity() * 1e-4;
-      EXPECT_TRUE(from_r2.Write(robot_agent::ToMsg(late)));
+      EXPECT_TRUE(from_r2.Write(MeasurementOfStep1("r2")));
       EXPECT_TRUE(from_r2.WaitForAcknowledgments(seconds(20)));
     }
     EXPECT_TRUE(sim.PublishStep(k, OneLandmark(false), 1.0, 0.2));
@@ -166,11 +171,7 @@ TEST(AgentRejectsTest, PeerMessageNamingAnotherSenderThanItsTopicIsMalformed) {
   ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(log_path);
   ASSERT_TRUE(sim.PublishStep(1, OneLandmark(false), 1.0, 0.2));
   ASSERT_EQ(sim.WaitAck(1), 0) << testing::ReadFile(log_path);
-  robot_agent::cooperation::RelativeMeasurement forged;
-  forged.header = {"r3", "r1", 1, kDt, 1};
-  forged.range_m = 3.0;
-  forged.sender_covariance = Eigen::Matrix3d::Identity() * 1e-4;
-  ASSERT_TRUE(from_r2.Write(robot_agent::ToMsg(forged)));
+  ASSERT_TRUE(from_r2.Write(MeasurementOfStep1("r3")));
   ASSERT_TRUE(from_r2.WaitForAcknowledgments(seconds(20)));
   for (std::uint32_t k = 2; k <= kSteps; ++k) {
     ASSERT_TRUE(sim.PublishStep(k, OneLandmark(false), 1.0, 0.2));
@@ -199,11 +200,7 @@ TEST(AgentRejectsTest, APeerMessageTheClockDidNotAnnounceIsContested) {
   ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(log_path);
   ASSERT_TRUE(sim.PublishStep(1, OneLandmark(false), 1.0, 0.2));
   ASSERT_EQ(sim.WaitAck(1), 0) << testing::ReadFile(log_path);
-  robot_agent::cooperation::RelativeMeasurement forged;
-  forged.header = {"r2", "r1", 1, kDt, 1};
-  forged.range_m = 3.0;
-  forged.sender_covariance = Eigen::Matrix3d::Identity() * 1e-4;
-  ASSERT_TRUE(as_r2.Write(robot_agent::ToMsg(forged)));
+  ASSERT_TRUE(as_r2.Write(MeasurementOfStep1("r2")));
   ASSERT_TRUE(as_r2.WaitForAcknowledgments(seconds(20)));
   for (std::uint32_t k = 2; k <= kSteps; ++k) {
     ASSERT_TRUE(sim.PublishStep(k, OneLandmark(false), 1.0, 0.2));  // announcing no peer message
