@@ -304,11 +304,7 @@ struct AgentNode::Impl {
       bytes_sent_to[message.recipient_id()] += std::decay_t<decltype(message)>::getCdrSerializedSize(message);
     };
     for (auto& m : outbox.measurements) count(out.relative.emplace_back(ToMsg(stamp(&m))));
-    for (auto& m : outbox.maps) {
-      count(out.maps.emplace_back(ToMsg(stamp(&m))));
-      spdlog::info("sent a map snapshot of {} landmarks and a history of {} steps to {}", m.landmarks.size(),
-                   m.history.size(), m.header.recipient);
-    }
+    for (auto& m : outbox.maps) count(out.maps.emplace_back(ToMsg(stamp(&m))));
     for (auto& m : outbox.moved) count(out.moved.emplace_back(ToMsg(stamp(&m))));
     for (auto& m : outbox.factors) count(out.factors.emplace_back(ToMsg(stamp(&m))));
     return out;
@@ -328,7 +324,11 @@ struct AgentNode::Impl {
       if (!writer.Write(message)) throw AgentError("DDS refused a peer message to " + message.recipient_id());
     };
     for (const auto& m : messages.relative) write(to(m).relative, m);
-    for (const auto& m : messages.maps) write(to(m).map, m);
+    for (const auto& m : messages.maps) {
+      write(to(m).map, m);
+      spdlog::info("sent a map snapshot of {} landmarks and a history of {} steps to {}", m.landmarks().size(),
+                   m.history().size(), m.recipient_id());
+    }
     for (const auto& m : messages.moved) write(to(m).moved, m);
     for (const auto& m : messages.factors) write(*to(m).factors, m);
     return counts;

@@ -1,6 +1,7 @@
 // Multi-process: world_sim in lockstep with fake agents that acknowledge each step; a test
 // subscriber receives every step of every topic exactly once, in order, with the values the
-// simulation core computes for the same scenario and seed.
+// simulation core computes for the same scenario and seed. In realtime, the robots' data are
+// spread over the step (run.stagger_robots).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
