@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   using namespace mrslam;
   robot_agent::AgentFlags flags;
   return common::RunMain(
-      "robot_agent", "mrslam robot agent: runs one robot's SLAM filter on its own sensor topics", argc, argv,
+      "robot_agent", "mrslam robot agent: runs one robot's SLAM filter on its own sensor topic", argc, argv,
       [&](CLI::App& app) { robot_agent::AddFlags(app, &flags); },
       [&](const CLI::App&) { return robot_agent::Run(flags); });
 }

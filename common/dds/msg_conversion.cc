@@ -1,5 +1,7 @@
 #include "common/dds/msg_conversion.h"
 
+#include <vector>
+
 namespace mrslam::dds {
 
 msg::Stamp ToMsg(const common::Stamp& s) {
@@ -36,82 +38,109 @@ Eigen::Matrix3d CovarianceFromMsg(const std::array<double, 9>& a) {
   return m;
 }
 
+namespace {
+msg::LandmarkDetection ItemToMsg(const common::LandmarkDetection& d) {
+  msg::LandmarkDetection m;
+  m.time_s(d.time_s);
+  m.range_m(d.range_m);
+  m.bearing_rad(d.bearing_rad);
+  m.landmark_id(d.landmark_id);
+  return m;
+}
+msg::RobotDetection ItemToMsg(const common::RobotDetection& d) {
+  msg::RobotDetection m;
+  m.time_s(d.time_s);
+  m.range_m(d.range_m);
+  m.bearing_rad(d.bearing_rad);
+  m.seen_robot_id(d.seen_robot_id);
+  return m;
+}
+msg::ImuReading ItemToMsg(const common::ImuReading& r) {
+  msg::ImuReading m;
+  m.time_s(r.time_s);
+  m.gyro_z_radps(r.gyro_z_radps);
+  m.accel_x_mps2(r.accel_x_mps2);
+  m.accel_y_mps2(r.accel_y_mps2);
+  return m;
+}
+msg::OdometrySegment ItemToMsg(const common::OdometrySegment& g) {
+  msg::OdometrySegment m;
+  m.time_s(g.time_s);
+  m.dt_s(g.dt_s);
+  m.v_mps(g.v_mps);
+  m.w_radps(g.w_radps);
+  return m;
+}
+common::LandmarkDetection ItemFromMsg(const msg::LandmarkDetection& d) {
+  return {d.time_s(), d.range_m(), d.bearing_rad(), d.landmark_id()};
+}
+common::RobotDetection ItemFromMsg(const msg::RobotDetection& d) {
+  return {d.time_s(), d.range_m(), d.bearing_rad(), d.seen_robot_id()};
+}
+common::ImuReading ItemFromMsg(const msg::ImuReading& r) {
+  return {r.time_s(), r.gyro_z_radps(), r.accel_x_mps2(), r.accel_y_mps2()};
+}
+common::OdometrySegment ItemFromMsg(const msg::OdometrySegment& g) {
+  return {g.time_s(), g.dt_s(), g.v_mps(), g.w_radps()};
+}
+
+// Every item of a sequence converted, in order.
+template <typename Out, typename In>
+std::vector<Out> ItemsToMsg(const std::vector<In>& items) {
+  std::vector<Out> out;
+  out.reserve(items.size());
+  for (const auto& item : items) out.push_back(ItemToMsg(item));
+  return out;
+}
+template <typename Out, typename In>
+std::vector<Out> ItemsFromMsg(const std::vector<In>& items) {
+  std::vector<Out> out;
+  out.reserve(items.size());
+  for (const auto& item : items) out.push_back(ItemFromMsg(item));
+  return out;
+}
+}  // namespace
+
 msg::LidarScan ToMsg(const common::LidarScan& scan) {
   msg::LidarScan m;
   m.stamp(ToMsg(scan.stamp));
-  for (const auto& d : scan.landmarks) {
-    msg::LandmarkDetection md;
-    md.time_s(d.time_s);
-    md.range_m(d.range_m);
-    md.bearing_rad(d.bearing_rad);
-    md.landmark_id(d.landmark_id);
-    m.landmarks().push_back(md);
-  }
-  for (const auto& d : scan.robots) {
-    msg::RobotDetection md;
-    md.time_s(d.time_s);
-    md.range_m(d.range_m);
-    md.bearing_rad(d.bearing_rad);
-    md.seen_robot_id(d.seen_robot_id);
-    m.robots().push_back(md);
-  }
+  m.landmarks(ItemsToMsg<msg::LandmarkDetection>(scan.landmarks));
+  m.robots(ItemsToMsg<msg::RobotDetection>(scan.robots));
   return m;
 }
 
 common::LidarScan FromMsg(const msg::LidarScan& scan) {
-  common::LidarScan s;
-  s.stamp = FromMsg(scan.stamp());
-  for (const auto& d : scan.landmarks()) {
-    s.landmarks.push_back({d.time_s(), d.range_m(), d.bearing_rad(), d.landmark_id()});
-  }
-  for (const auto& d : scan.robots()) {
-    s.robots.push_back({d.time_s(), d.range_m(), d.bearing_rad(), d.seen_robot_id()});
-  }
-  return s;
-}
-
-msg::Imu ToMsg(const common::ImuSamples& imu) {
-  msg::Imu m;
-  m.stamp(ToMsg(imu.stamp));
-  for (const auto& r : imu.readings) {
-    msg::ImuReading mr;
-    mr.time_s(r.time_s);
-    mr.gyro_z_radps(r.gyro_z_radps);
-    mr.accel_x_mps2(r.accel_x_mps2);
-    mr.accel_y_mps2(r.accel_y_mps2);
-    m.readings().push_back(mr);
-  }
-  return m;
-}
-
-common::ImuSamples FromMsg(const msg::Imu& imu) {
-  common::ImuSamples s;
-  s.stamp = FromMsg(imu.stamp());
-  for (const auto& r : imu.readings()) {
-    s.readings.push_back({r.time_s(), r.gyro_z_radps(), r.accel_x_mps2(), r.accel_y_mps2()});
-  }
-  return s;
+  return {FromMsg(scan.stamp()), ItemsFromMsg<common::LandmarkDetection>(scan.landmarks()),
+          ItemsFromMsg<common::RobotDetection>(scan.robots())};
 }
 
 msg::Odometry ToMsg(const common::Odometry& odom) {
   msg::Odometry m;
   m.stamp(ToMsg(odom.stamp));
-  for (const auto& g : odom.segments) {
-    msg::OdometrySegment mg;
-    mg.time_s(g.time_s);
-    mg.dt_s(g.dt_s);
-    mg.v_mps(g.v_mps);
-    mg.w_radps(g.w_radps);
-    m.segments().push_back(mg);
-  }
+  m.segments(ItemsToMsg<msg::OdometrySegment>(odom.segments));
   return m;
 }
 
 common::Odometry FromMsg(const msg::Odometry& odom) {
-  common::Odometry s;
-  s.stamp = FromMsg(odom.stamp());
-  for (const auto& g : odom.segments()) s.segments.push_back({g.time_s(), g.dt_s(), g.v_mps(), g.w_radps()});
-  return s;
+  return {FromMsg(odom.stamp()), ItemsFromMsg<common::OdometrySegment>(odom.segments())};
+}
+
+msg::SensorStep ToMsg(const common::SensorStep& step) {
+  msg::SensorStep m;
+  m.stamp(ToMsg(step.odometry.stamp));
+  m.landmarks(ItemsToMsg<msg::LandmarkDetection>(step.lidar.landmarks));
+  m.robots(ItemsToMsg<msg::RobotDetection>(step.lidar.robots));
+  m.imu_readings(ItemsToMsg<msg::ImuReading>(step.imu.readings));
+  m.odometry_segments(ItemsToMsg<msg::OdometrySegment>(step.odometry.segments));
+  return m;
+}
+
+common::SensorStep FromMsg(const msg::SensorStep& step) {
+  const common::Stamp stamp = FromMsg(step.stamp());
+  return {{stamp, ItemsFromMsg<common::LandmarkDetection>(step.landmarks()),
+           ItemsFromMsg<common::RobotDetection>(step.robots())},
+          {stamp, ItemsFromMsg<common::ImuReading>(step.imu_readings())},
+          {stamp, ItemsFromMsg<common::OdometrySegment>(step.odometry_segments())}};
 }
 
 namespace {

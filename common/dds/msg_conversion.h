@@ -21,10 +21,12 @@ Eigen::Matrix3d CovarianceFromMsg(const std::array<double, 9>& a);
 
 msg::LidarScan ToMsg(const common::LidarScan& scan);
 common::LidarScan FromMsg(const msg::LidarScan& scan);
-msg::Imu ToMsg(const common::ImuSamples& imu);
-common::ImuSamples FromMsg(const msg::Imu& imu);
 msg::Odometry ToMsg(const common::Odometry& odom);
 common::Odometry FromMsg(const msg::Odometry& odom);
+// One message per robot and step, stamped with the odometry's stamp (the simulator stamps the
+// three parts alike); each part read back carries the message's stamp.
+msg::SensorStep ToMsg(const common::SensorStep& step);
+common::SensorStep FromMsg(const msg::SensorStep& step);
 msg::GroundTruth ToMsg(const common::GroundTruth& truth);
 common::GroundTruth FromMsg(const msg::GroundTruth& truth);
 

@@ -140,9 +140,7 @@ fdds::DataReaderQos Participant::ReaderQos(History history) const {
   return qos;
 }
 
-std::string LidarTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/lidar"; }
-std::string ImuTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/imu"; }
-std::string OdometryTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/odom"; }
+std::string SensorTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/sensors"; }
 std::string EstimateTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/estimate"; }
 std::string FinalTrajectoryTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/final_trajectory"; }
 std::string AckTopic(const std::string& robot_id) { return "mrslam/" + robot_id + "/ack"; }

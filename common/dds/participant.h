@@ -249,9 +249,7 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
 };
 
 // Topic names (docs/dds.md).
-std::string LidarTopic(const std::string& robot_id);
-std::string ImuTopic(const std::string& robot_id);
-std::string OdometryTopic(const std::string& robot_id);
+std::string SensorTopic(const std::string& robot_id);
 std::string EstimateTopic(const std::string& robot_id);
 std::string FinalTrajectoryTopic(const std::string& robot_id);
 std::string AckTopic(const std::string& robot_id);

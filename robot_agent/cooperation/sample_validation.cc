@@ -13,7 +13,6 @@ int EraseIf(std::vector<T>* items, Bad bad) {
   return static_cast<int>(before - items->size());
 }
 bool Finite(double v) { return std::isfinite(v); }
-}  // namespace
 
 int SanitizeLidar(common::LidarScan* scan) {
   return EraseIf(&scan->landmarks,
@@ -35,6 +34,12 @@ int SanitizeImu(common::ImuSamples* imu) {
   return EraseIf(&imu->readings, [](const common::ImuReading& r) {
     return !Finite(r.gyro_z_radps) || !Finite(r.accel_x_mps2) || !Finite(r.accel_y_mps2) || !Finite(r.time_s);
   });
+}
+
+}  // namespace
+
+int SanitizeSensorStep(common::SensorStep* step) {
+  return SanitizeLidar(&step->lidar) + SanitizeImu(&step->imu) + SanitizeOdometry(&step->odometry);
 }
 
 std::string StampProblem(const common::Stamp& stamp, const std::string& own_robot_id) {

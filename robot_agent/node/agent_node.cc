@@ -37,9 +37,7 @@ struct AgentNode::Impl {
   std::unique_ptr<filters::SlamFilter> filter;
   dds::Participant participant;
   dds::Notifier notifier;
-  dds::Reader<msg::LidarScanPubSubType> lidar_reader;
-  dds::Reader<msg::ImuPubSubType> imu_reader;
-  dds::Reader<msg::OdometryPubSubType> odometry_reader;
+  dds::Reader<msg::SensorStepPubSubType> sensor_reader;
   dds::Reader<msg::StepClockPubSubType> clock_reader;
   dds::Writer<msg::EstimatePubSubType> estimate_writer;
   dds::Writer<msg::StepAckPubSubType> ack_writer;
@@ -63,10 +61,8 @@ struct AgentNode::Impl {
   std::uint32_t next_step = 1;
   std::uint32_t restored_step = 0;    // the step of the snapshot restored at the start (0: none)
   std::size_t rendezvous_logged = 0;  // rendezvous() entries logged so far
-  // Samples buffered by step until the step is complete, taken only from the simulator.
-  cooperation::StepSlots<common::LidarScan> lidar;
-  cooperation::StepSlots<common::ImuSamples> imu;
-  cooperation::StepSlots<common::Odometry> odometry;
+  // Sensor steps buffered by step until the step is complete, taken only from the simulator.
+  cooperation::StepSlots<common::SensorStep> sensors;
   std::map<std::uint32_t, msg::StepClock> clock;
   cooperation::SimulatorBinding simulator;
 
@@ -76,18 +72,14 @@ struct AgentNode::Impl {
         filter(std::move(f)),
         participant(
             {o.domain, "robot_agent/" + a.robot_id, o.shared_memory, o.security_dir, a.robot_id, o.history_steps}),
-        lidar_reader(participant, dds::LidarTopic(a.robot_id), &notifier),
-        imu_reader(participant, dds::ImuTopic(a.robot_id), &notifier),
-        odometry_reader(participant, dds::OdometryTopic(a.robot_id), &notifier),
+        sensor_reader(participant, dds::SensorTopic(a.robot_id), &notifier),
         clock_reader(participant, dds::kClockTopic, &notifier),
         estimate_writer(participant, dds::EstimateTopic(a.robot_id)),
         ack_writer(participant, dds::AckTopic(a.robot_id)),
         final_writer(participant, dds::FinalTrajectoryTopic(a.robot_id), dds::History::kWhole),
         cooperation(a),
         joint_tracker(a),
-        lidar(o.horizon_steps),
-        imu(o.horizon_steps),
-        odometry(o.horizon_steps) {
+        sensors(o.horizon_steps) {
     for (const auto& peer : a.team) {
       if (peer != a.robot_id)
         from_peers[peer] =
@@ -105,35 +97,28 @@ struct AgentNode::Impl {
   // the DDS history, dropped without a count (without a snapshot, an old step is stale).
   bool Replayed(std::uint32_t step) const { return restored_step > 0 && step <= restored_step; }
 
-  // Buffers a sample of a future or current step, or rejects it.
-  template <typename T>
-  void Buffer(T sample, const common::WriterId& writer, cooperation::StepSlots<T>* slots, int (*sanitize)(T*),
-              const char* what) {
-    const std::uint32_t step = sample.stamp.step;
-    if (const auto problem = cooperation::StampProblem(sample.stamp, agent.robot_id); !problem.empty()) {
-      Reject(cooperation::Rejection::kMalformed, std::string(what) + ": " + problem);
+  // Buffers a sensor step of a future or current step, or rejects it.
+  void Buffer(common::SensorStep sample, const common::WriterId& writer) {
+    const common::Stamp& stamp = sample.odometry.stamp;
+    const std::uint32_t step = stamp.step;
+    if (const auto problem = cooperation::StampProblem(stamp, agent.robot_id); !problem.empty()) {
+      Reject(cooperation::Rejection::kMalformed, "sensor step: " + problem);
       return;
     }
     if (Replayed(step)) return;
-    if (const int bad = sanitize(&sample); bad > 0) {
-      Reject(cooperation::Rejection::kMalformed, fmt::format("{} malformed {} item(s) of step {}", bad, what, step),
+    if (const int bad = cooperation::SanitizeSensorStep(&sample); bad > 0) {
+      Reject(cooperation::Rejection::kMalformed, fmt::format("{} malformed sensor item(s) of step {}", bad, step),
              static_cast<std::uint32_t>(bad));
     }
-    if (const auto kind = slots->Offer(step, next_step, writer, std::move(sample))) {
-      Reject(*kind, fmt::format("{} sample of step {} (the agent is at step {})", what, step, next_step));
+    if (const auto kind = sensors.Offer(step, next_step, writer, std::move(sample))) {
+      Reject(*kind, fmt::format("sensor step {} (the agent is at step {})", step, next_step));
     }
   }
 
   void Drain() {
     common::WriterId writer{};
-    msg::LidarScan l;
-    while (lidar_reader.TryTake(&l, &writer))
-      Buffer(dds::FromMsg(l), writer, &lidar, &cooperation::SanitizeLidar, "lidar");
-    msg::Imu m;
-    while (imu_reader.TryTake(&m, &writer)) Buffer(dds::FromMsg(m), writer, &imu, &cooperation::SanitizeImu, "imu");
-    msg::Odometry od;
-    while (odometry_reader.TryTake(&od, &writer))
-      Buffer(dds::FromMsg(od), writer, &odometry, &cooperation::SanitizeOdometry, "odometry");
+    msg::SensorStep m;
+    while (sensor_reader.TryTake(&m, &writer)) Buffer(dds::FromMsg(m), writer);
     msg::StepClock c;
     while (clock_reader.TryTake(&c, &writer)) AcceptClock(c, writer);
     for (auto& [peer, from] : from_peers) DrainPeer(peer, from.get());
@@ -561,18 +546,16 @@ struct AgentNode::Impl {
   bool TryProcess(bool* last) {
     const std::uint32_t k = next_step;
     const auto& sim = simulator.simulator();
-    if (!sim || !clock.count(k) || !lidar.Has(k, *sim) || !imu.Has(k, *sim) || !odometry.Has(k, *sim)) return false;
+    if (!sim || !clock.count(k) || !sensors.Has(k, *sim)) return false;
     if (!PeerMessagesComplete(clock[k])) return false;
     CheckPeerCounts(clock[k]);
     const double cpu_start_s = common::ThreadCpuSeconds();
     ApplyPeerMessages(k);
     const std::uint32_t foreign_before = counters.rejected.Of(cooperation::Rejection::kForeignWriter);
-    common::SensorStep step{lidar.Take(k, *sim, &counters.rejected), imu.Take(k, *sim, &counters.rejected),
-                            odometry.Take(k, *sim, &counters.rejected)};
+    const common::SensorStep step = sensors.Take(k, *sim, &counters.rejected);
     if (const auto foreign = counters.rejected.Of(cooperation::Rejection::kForeignWriter) - foreign_before;
         foreign > 0) {
-      spdlog::warn("rejected (foreign-writer): {} sensor sample(s) of step {} not written by the simulator", foreign,
-                   k);
+      spdlog::warn("rejected (foreign-writer): {} sensor step(s) of step {} not written by the simulator", foreign, k);
     }
     *last = clock[k].last_step();
     const double time_s = clock[k].stamp().time_s();

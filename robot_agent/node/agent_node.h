@@ -53,7 +53,7 @@ struct AgentCounters {
   std::uint32_t peer_messages_late = 0;
 };
 
-// A robot agent's DDS node: reads only its own robot's lidar, IMU and odometry topics and the
+// A robot agent's DDS node: reads only its own robot's sensor topic (lidar, IMU and odometry) and the
 // step clock (never the truth), runs the filter on each complete step in order, publishes its
 // estimate on mrslam/<robot>/estimate and acknowledges the step on mrslam/<robot>/ack (step 0 =
 // ready). Sensor samples are taken only from the simulator (the participant that writes the step

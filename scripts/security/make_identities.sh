@@ -110,26 +110,26 @@ peer_topics() {
 grants() {
   case $1 in
     world_sim)
-      echo "<publish><topics>$(topics mrslam/ /lidar /imu /odom)"
+      echo "<publish><topics>$(topics mrslam/ /sensors)"
       echo "<topic>mrslam/world/truth</topic><topic>mrslam/world/clock</topic></topics></publish>"
       echo "<subscribe><topics>$(topics mrslam/ /ack)</topics></subscribe>"
       ;;
     evaluator)
       echo "<subscribe><topics><topic>mrslam/world/truth</topic>"
-      echo "$(topics mrslam/ /estimate /odom /final_trajectory)</topics></subscribe>"
+      echo "$(topics mrslam/ /estimate /sensors /final_trajectory)</topics></subscribe>"
       ;;
     monitor)
       echo "<subscribe><topics><topic>mrslam/world/clock</topic>$(topics mrslam/ /estimate)</topics></subscribe>"
       ;;
     viewer)
       echo "<subscribe><topics><topic>mrslam/world/clock</topic><topic>mrslam/world/truth</topic>"
-      echo "$(topics mrslam/ /estimate /lidar)</topics></subscribe>"
+      echo "$(topics mrslam/ /estimate /sensors)</topics></subscribe>"
       ;;
     *)
       echo "<publish><topics><topic>mrslam/$1/estimate</topic><topic>mrslam/$1/ack</topic>"
       echo "<topic>mrslam/$1/final_trajectory</topic>$(peer_topics "$1" out)</topics></publish>"
-      echo "<subscribe><topics><topic>mrslam/$1/lidar</topic><topic>mrslam/$1/imu</topic>"
-      echo "<topic>mrslam/$1/odom</topic><topic>mrslam/world/clock</topic>$(peer_topics "$1" in)</topics></subscribe>"
+      echo "<subscribe><topics><topic>mrslam/$1/sensors</topic><topic>mrslam/world/clock</topic>"
+      echo "$(peer_topics "$1" in)</topics></subscribe>"
       ;;
   esac
 }

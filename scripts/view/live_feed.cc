@@ -18,7 +18,7 @@ struct LiveFeed::State {
   dds::Reader<msg::StepClockPubSubType> clock;
   dds::Reader<msg::GroundTruthPubSubType> truth;
   std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimate_readers;
-  std::map<std::string, std::unique_ptr<dds::Reader<msg::LidarScanPubSubType>>> lidar_readers;
+  std::map<std::string, std::unique_ptr<dds::Reader<msg::SensorStepPubSubType>>> sensor_readers;
 
   std::uint32_t step = 0;
   double time_s = 0.0;
@@ -31,12 +31,13 @@ struct LiveFeed::State {
     for (const auto& r : scenario.robots) {
       estimate_readers[r.id] =
           std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id));
-      lidar_readers[r.id] = std::make_unique<dds::Reader<msg::LidarScanPubSubType>>(participant, dds::LidarTopic(r.id));
+      sensor_readers[r.id] =
+          std::make_unique<dds::Reader<msg::SensorStepPubSubType>>(participant, dds::SensorTopic(r.id));
     }
   }
   ~State() {  // readers before their participant
     estimate_readers.clear();
-    lidar_readers.clear();
+    sensor_readers.clear();
   }
 
   // Takes every queued sample into the latest state; true when anything arrived.
@@ -55,7 +56,7 @@ struct LiveFeed::State {
       if (!latest_truth || t.stamp().step() >= latest_truth->stamp.step) latest_truth = dds::FromMsg(t);
     }
     for (auto& [id, reader] : estimate_readers) changed = DrainEstimates(id, *reader) || changed;
-    for (auto& [id, reader] : lidar_readers) changed = DrainScans(id, *reader) || changed;
+    for (auto& [id, reader] : sensor_readers) changed = DrainScans(id, *reader) || changed;
     return changed;
   }
 
@@ -69,12 +70,12 @@ struct LiveFeed::State {
     return any;
   }
 
-  bool DrainScans(const std::string& id, dds::Reader<msg::LidarScanPubSubType>& reader) {
-    msg::LidarScan s;
+  bool DrainScans(const std::string& id, dds::Reader<msg::SensorStepPubSubType>& reader) {
+    msg::SensorStep s;
     bool any = false;
     while (reader.TryTake(&s)) {
       any = true;
-      scans[id] = dds::FromMsg(s);
+      scans[id] = dds::FromMsg(s).lidar;
     }
     return any;
   }

@@ -30,19 +30,15 @@ robot_agent::cooperation::PeerHeader Header() { return {"r2", "r1", 4, 2.6, 1}; 
 
 void WriteSensorSamples(const std::string& dir) {
   const common::Stamp stamp{"r1", 5, 3.25};
-  common::LidarScan scan{stamp, {{3.25, 2.0, 0.1, -1}, {3.25, 4.5, -0.7, 3}}, {{3.25, 3.0, 0.4, "r2"}}};
-  Write<msg::LidarScanPubSubType>(dir + "/lidar", 0, dds::ToMsg(scan));
-  common::ImuSamples imu;
-  imu.stamp = stamp;
-  Write<msg::ImuPubSubType>(dir + "/imu", 1, dds::ToMsg(imu));
-  common::Odometry odometry;
-  odometry.stamp = stamp;
-  odometry.segments.push_back({2.6, 0.65, 1.0, 0.2});
-  Write<msg::OdometryPubSubType>(dir + "/odometry", 2, dds::ToMsg(odometry));
+  common::SensorStep step;
+  step.lidar = {stamp, {{3.25, 2.0, 0.1, -1}, {3.25, 4.5, -0.7, 3}}, {{3.25, 3.0, 0.4, "r2"}}};
+  step.imu = {stamp, {{3.25, 0.2, 0.1, 0.0}}};
+  step.odometry = {stamp, {{2.6, 0.65, 1.0, 0.2}}};
+  Write<msg::SensorStepPubSubType>(dir + "/sensors", 0, dds::ToMsg(step));
   msg::StepClock clock;
   clock.stamp(dds::ToMsg(common::Stamp{"world", 5, 3.25}));
   clock.total_steps(100);
-  Write<msg::StepClockPubSubType>(dir + "/clock", 3, clock);
+  Write<msg::StepClockPubSubType>(dir + "/clock", 1, clock);
 }
 
 void WritePeerMessages(const std::string& dir) {

@@ -54,8 +54,8 @@ std::vector<std::string> AgentCommand(int domain, bool allow_rejected) {
   return testing::R1AgentCommand(domain, extra);
 }
 
-// Steps 1..3 with a NaN detection at step 1, then a stale scan of step 1 and an odometry sample
-// naming r2 before step 2: 2 malformed and 1 stale. Returns the agent's exit status.
+// Steps 1..3 with a NaN detection at step 1, then a stale sensor step 1 and a sensor step naming
+// r2 before step 2: 2 malformed and 1 stale. Returns the agent's exit status.
 std::optional<int> RunWithMalformedSamples(int domain, bool allow_rejected, const std::string& dir) {
   dds::Participant participant({domain, "fake_sim", false});
   FakeSimulator sim(participant, "r1", kSteps, kDt);
@@ -63,11 +63,8 @@ std::optional<int> RunWithMalformedSamples(int domain, bool allow_rejected, cons
   EXPECT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(dir + "/agent.log");
   EXPECT_TRUE(sim.PublishStep(1, OneLandmark(true), 1.0, 0.2));
   EXPECT_EQ(sim.WaitAck(1), 1) << testing::ReadFile(dir + "/agent.log");
-  EXPECT_TRUE(sim.PublishLidar(common::LidarScan{sim.StampOf(1), {}, {}}));  // stale
-  common::Odometry foreign;                                                  // not r1's
-  foreign.stamp = {"r2", 2, 2 * kDt};
-  foreign.segments.push_back({kDt, kDt, 1.0, 0.2});
-  EXPECT_TRUE(sim.PublishOdometry(foreign));
+  EXPECT_TRUE(sim.PublishSensors(sim.SensorStepOf(sim.StampOf(1), {}, 1.0, 0.2)));      // stale
+  EXPECT_TRUE(sim.PublishSensors(sim.SensorStepOf({"r2", 2, 2 * kDt}, {}, 1.0, 0.2)));  // not r1's
   EXPECT_TRUE(sim.PublishStep(2, OneLandmark(false), 1.0, 0.2));
   EXPECT_EQ(sim.WaitAck(2), 3) << testing::ReadFile(dir + "/agent.log");
   EXPECT_TRUE(sim.PublishStep(3, OneLandmark(false), 1.0, 0.2));
@@ -92,10 +89,10 @@ TEST(AgentRejectsTest, WithAllowRejectedTheAgentGoesOnAndEndsNormally) {
       << testing::ReadFile(temp_dir.path() + "/agent.log");
 }
 
-// Another participant writes scans on r1's lidar topic for every step before the simulator does
-// (the spoof that used to displace the real scans): the agent takes the simulator's, counts one
+// Another participant writes sensor steps on r1's topic for every step before the simulator does
+// (the spoof that used to displace the real ones): the agent takes the simulator's, counts one
 // foreign-writer rejection per step, and fails the run.
-TEST(AgentRejectsTest, ScansFromAnotherParticipantAreNotTakenAndFailTheRun) {
+TEST(AgentRejectsTest, SensorStepsFromAnotherParticipantAreNotTakenAndFailTheRun) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-rejects");
   const std::string log_path = temp_dir.path() + "/agent.log";
@@ -107,11 +104,10 @@ TEST(AgentRejectsTest, ScansFromAnotherParticipantAreNotTakenAndFailTheRun) {
   ASSERT_EQ(sim.WaitAck(0), 0) << testing::ReadFile(log_path);
   for (std::uint32_t k = 1; k <= kSteps; ++k) {
     common::LidarScan forged = OneLandmark(false);
-    forged.stamp = outsider.StampOf(k);
-    forged.landmarks.push_back({forged.stamp.time_s, 7.0, -1.0, -1});
-    ASSERT_TRUE(outsider.PublishLidar(forged));
+    forged.landmarks.push_back({outsider.StampOf(k).time_s, 7.0, -1.0, -1});
+    ASSERT_TRUE(outsider.PublishSensors(outsider.SensorStepOf(outsider.StampOf(k), forged, 3.0, -0.5)));
   }
-  ASSERT_TRUE(outsider.WaitLidarDelivered());
+  ASSERT_TRUE(outsider.WaitSensorsDelivered());
   for (std::uint32_t k = 1; k <= kSteps; ++k) {
     ASSERT_TRUE(sim.PublishStep(k, OneLandmark(false), 1.0, 0.2));
     EXPECT_EQ(sim.WaitAck(k), static_cast<int>(k)) << testing::ReadFile(log_path);

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/dds/msg_conversion.h"
@@ -19,28 +20,31 @@ class FakeSimulator {
       : robot_id_(robot_id),
         total_steps_(total_steps),
         dt_s_(dt_s),
-        lidar_(p, dds::LidarTopic(robot_id)),
-        imu_(p, dds::ImuTopic(robot_id)),
-        odometry_(p, dds::OdometryTopic(robot_id)),
+        sensors_(p, dds::SensorTopic(robot_id)),
         clock_(p, dds::kClockTopic),
         ack_(p, dds::AckTopic(robot_id)) {}
 
   common::Stamp StampOf(std::uint32_t k) const { return {robot_id_, k, dt_s_ * k}; }
 
-  // Publishes step k: the scan, one odometry segment (v, w) and an empty IMU message, then the
-  // clock announcing `deliveries` peer messages for this robot. False if DDS refused a sample.
+  // A sensor step stamped `stamp`: the scan, one odometry segment (v, w) ending at the stamp's
+  // time and no IMU reading.
+  common::SensorStep SensorStepOf(const common::Stamp& stamp, common::LidarScan scan, double v_mps,
+                                  double w_radps) const {
+    common::SensorStep step;
+    step.lidar = std::move(scan);
+    step.lidar.stamp = stamp;
+    step.imu.stamp = stamp;
+    step.odometry.stamp = stamp;
+    step.odometry.segments.push_back({stamp.time_s - dt_s_, dt_s_, v_mps, w_radps});
+    return step;
+  }
+
+  // Publishes step k (SensorStepOf its stamp), then the clock announcing `deliveries` peer
+  // messages for this robot. False if DDS refused a sample.
   bool PublishStep(std::uint32_t k, common::LidarScan scan, double v_mps, double w_radps,
                    const std::vector<std::pair<std::string, std::uint32_t>>& deliveries = {}) {
     const common::Stamp stamp = StampOf(k);
-    scan.stamp = stamp;
-    bool ok = lidar_.Write(dds::ToMsg(scan));
-    common::ImuSamples imu;
-    imu.stamp = stamp;
-    ok = imu_.Write(dds::ToMsg(imu)) && ok;
-    common::Odometry odometry;
-    odometry.stamp = stamp;
-    odometry.segments.push_back({stamp.time_s - dt_s_, dt_s_, v_mps, w_radps});
-    ok = odometry_.Write(dds::ToMsg(odometry)) && ok;
+    const bool ok = PublishSensors(SensorStepOf(stamp, std::move(scan), v_mps, w_radps));
     msg::StepClock c;
     c.stamp(dds::ToMsg(common::Stamp{"world", k, stamp.time_s}));
     c.total_steps(total_steps_);
@@ -54,10 +58,9 @@ class FakeSimulator {
     }
     return clock_.Write(c) && ok;
   }
-  bool PublishLidar(const common::LidarScan& scan) { return lidar_.Write(dds::ToMsg(scan)); }
-  // Waits until every reader has acknowledged the scans written so far.
-  bool WaitLidarDelivered() { return lidar_.WaitForAcknowledgments(std::chrono::seconds(20)); }
-  bool PublishOdometry(const common::Odometry& odometry) { return odometry_.Write(dds::ToMsg(odometry)); }
+  bool PublishSensors(const common::SensorStep& step) { return sensors_.Write(dds::ToMsg(step)); }
+  // Waits until every reader has acknowledged the sensor steps written so far.
+  bool WaitSensorsDelivered() { return sensors_.WaitForAcknowledgments(std::chrono::seconds(20)); }
 
   // Waits for the agent's acknowledgement of step k; returns its rejected-sample count (-1 on
   // timeout).
@@ -73,9 +76,7 @@ class FakeSimulator {
   std::string robot_id_;
   std::uint32_t total_steps_;
   double dt_s_;
-  dds::Writer<msg::LidarScanPubSubType> lidar_;
-  dds::Writer<msg::ImuPubSubType> imu_;
-  dds::Writer<msg::OdometryPubSubType> odometry_;
+  dds::Writer<msg::SensorStepPubSubType> sensors_;
   dds::Writer<msg::StepClockPubSubType> clock_;
   dds::Reader<msg::StepAckPubSubType> ack_;
 };

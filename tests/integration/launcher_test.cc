@@ -468,7 +468,7 @@ TEST(LauncherTest, AFailedSeedDoesNotEndTheOthersAndTheAggregateNamesIt) {
   std::filesystem::remove(out + ".log");
 }
 
-// A sample that does not belong to the run (here a scan for r1 stamped with a step already
+// A sample that does not belong to the run (here a sensor step for r1 stamped with a step already
 // processed, as another run on the same domain would send) is rejected by the agent, counted in
 // summary.json and named in a warning once the run is over.
 TEST(LauncherTest, AForeignSampleIsCountedAndWarnedAbout) {
@@ -479,12 +479,12 @@ TEST(LauncherTest, AForeignSampleIsCountedAndWarnedAbout) {
   ASSERT_TRUE(launcher.started());
   {
     dds::Participant participant({kForeignDomain, "foreign_run", false});
-    dds::Writer<msg::LidarScanPubSubType> writer(participant, dds::LidarTopic("r1"));
+    dds::Writer<msg::SensorStepPubSubType> writer(participant, dds::SensorTopic("r1"));
     ASSERT_TRUE(WaitForEstimateStep(kForeignDomain, "r1", 3, launcher, seconds(120))) << ReadFile(out + "/launch.log");
-    msg::LidarScan scan;
-    scan.stamp().robot_id("r1");
-    scan.stamp().step(1);
-    ASSERT_TRUE(writer.Write(scan));
+    msg::SensorStep step;
+    step.stamp().robot_id("r1");
+    step.stamp().step(1);
+    ASSERT_TRUE(writer.Write(step));
     EXPECT_TRUE(writer.WaitForAcknowledgments(milliseconds(5000)));
   }
   ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + "/launch.log");

@@ -149,10 +149,11 @@ TEST(SecurityTest, OutsiderWithoutCertificateReadsAndInjectsNothing) {
   dds::Participant outsider({kOutsiderDomain, "outsider", false});
   outsider.get()->set_listener(&announced, eprosima::fastdds::dds::StatusMask::none());
   dds::Reader<msg::GroundTruthPubSubType> truth(outsider, dds::kTruthTopic);
-  dds::Writer<msg::LidarScanPubSubType> lidar(outsider, dds::LidarTopic("r1"));
+  dds::Writer<msg::SensorStepPubSubType> sensors(outsider, dds::SensorTopic("r1"));
   for (std::uint32_t k = 1; k <= kSteps; ++k) {
-    common::LidarScan forged{{"r1", k, 0.65 * k}, {{0.65 * k, 3.0, 0.5, -1}}, {}};
-    ASSERT_TRUE(lidar.Write(dds::ToMsg(forged)));
+    const common::Stamp stamp{"r1", k, 0.65 * k};
+    common::SensorStep forged{{stamp, {{0.65 * k, 3.0, 0.5, -1}}, {}}, {stamp, {}}, {stamp, {}}};
+    ASSERT_TRUE(sensors.Write(dds::ToMsg(forged)));
   }
   ChildProcess launcher(LaunchArgs(out, kOutsiderDomain, kSteps, true), out + ".log");
   int most_matched = 0;
@@ -160,7 +161,7 @@ TEST(SecurityTest, OutsiderWithoutCertificateReadsAndInjectsNothing) {
   const auto deadline = std::chrono::steady_clock::now() + seconds(300);
   while (!code && std::chrono::steady_clock::now() < deadline) {
     code = launcher.WaitExit(milliseconds(20));
-    most_matched = std::max({most_matched, truth.MatchedWriters(), lidar.MatchedReaders()});
+    most_matched = std::max({most_matched, truth.MatchedWriters(), sensors.MatchedReaders()});
   }
   const bool saw_world_sim = announced.Has("world_sim");
   outsider.get()->set_listener(nullptr);
@@ -188,7 +189,7 @@ TEST(SecurityTest, AnAuthenticatedRobotCannotSpeakForAnother) {
   EXPECT_NO_THROW(dds::Writer<msg::EstimatePubSubType>(r2, dds::EstimateTopic("r2")));
   EXPECT_NO_THROW(dds::Writer<msg::RelativeMeasurementPubSubType>(r2, dds::PeerTopic("r1", "r2", "relative")));
   EXPECT_NO_THROW(dds::Reader<msg::MapSnapshotPubSubType>(r2, dds::PeerTopic("r2", "r1", "map")));
-  EXPECT_THROW(dds::Writer<msg::LidarScanPubSubType>(r2, dds::LidarTopic("r1")), dds::DdsError);
+  EXPECT_THROW(dds::Writer<msg::SensorStepPubSubType>(r2, dds::SensorTopic("r1")), dds::DdsError);
   EXPECT_THROW(dds::Writer<msg::EstimatePubSubType>(r2, dds::EstimateTopic("r1")), dds::DdsError);
   EXPECT_THROW(dds::Writer<msg::GroundTruthPubSubType>(r2, dds::kTruthTopic), dds::DdsError);
   EXPECT_THROW(dds::Writer<msg::RelativeMeasurementPubSubType>(r2, dds::PeerTopic("r2", "r1", "relative")),

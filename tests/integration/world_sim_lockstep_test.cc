@@ -76,17 +76,13 @@ TEST(WorldSimLockstepTest, EveryTopicEveryStepOnceInOrderWithCoreValues) {
 
   dds::Participant participant({kDomain, "lockstep_test", false});
   struct RobotReaders {
-    std::unique_ptr<dds::Reader<msg::LidarScanPubSubType>> lidar;
-    std::unique_ptr<dds::Reader<msg::ImuPubSubType>> imu;
-    std::unique_ptr<dds::Reader<msg::OdometryPubSubType>> odometry;
+    std::unique_ptr<dds::Reader<msg::SensorStepPubSubType>> sensors;
     std::unique_ptr<dds::Writer<msg::StepAckPubSubType>> ack;  // the fake agent
   };
   std::map<std::string, RobotReaders> robots;
   for (const auto& r : scenario.robots) {
     auto& rr = robots[r.id];
-    rr.lidar = std::make_unique<dds::Reader<msg::LidarScanPubSubType>>(participant, dds::LidarTopic(r.id));
-    rr.imu = std::make_unique<dds::Reader<msg::ImuPubSubType>>(participant, dds::ImuTopic(r.id));
-    rr.odometry = std::make_unique<dds::Reader<msg::OdometryPubSubType>>(participant, dds::OdometryTopic(r.id));
+    rr.sensors = std::make_unique<dds::Reader<msg::SensorStepPubSubType>>(participant, dds::SensorTopic(r.id));
     rr.ack = std::make_unique<dds::Writer<msg::StepAckPubSubType>>(participant, dds::AckTopic(r.id));
   }
   dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic);
@@ -129,21 +125,16 @@ TEST(WorldSimLockstepTest, EveryTopicEveryStepOnceInOrderWithCoreValues) {
   for (std::size_t i = 0; i < scenario.robots.size(); ++i) {
     const auto& id = scenario.robots[i].id;
     auto& rr = robots[id];
-    const auto lidar = TakeAll<decltype(*rr.lidar), msg::LidarScan>(*rr.lidar);
-    const auto imu = TakeAll<decltype(*rr.imu), msg::Imu>(*rr.imu);
-    const auto odometry = TakeAll<decltype(*rr.odometry), msg::Odometry>(*rr.odometry);
-    ASSERT_EQ(lidar.size(), static_cast<std::size_t>(kSteps)) << id;
-    ASSERT_EQ(imu.size(), static_cast<std::size_t>(kSteps)) << id;
-    ASSERT_EQ(odometry.size(), static_cast<std::size_t>(kSteps)) << id;
+    const auto sensors = TakeAll<decltype(*rr.sensors), msg::SensorStep>(*rr.sensors);
+    ASSERT_EQ(sensors.size(), static_cast<std::size_t>(kSteps)) << id;
     for (int k = 1; k <= kSteps; ++k) {
       const auto& want = expected[static_cast<std::size_t>(k - 1)][i];
-      const auto got_lidar = dds::FromMsg(lidar[static_cast<std::size_t>(k - 1)]);
-      EXPECT_EQ(got_lidar.stamp.step, static_cast<std::uint32_t>(k)) << id;
-      EXPECT_EQ(got_lidar.stamp.robot_id, id);
-      EXPECT_TRUE(SameLidar(got_lidar, want.lidar)) << id << " lidar step " << k;
-      EXPECT_TRUE(SameImu(dds::FromMsg(imu[static_cast<std::size_t>(k - 1)]), want.imu)) << id << " imu step " << k;
-      EXPECT_TRUE(SameOdometry(dds::FromMsg(odometry[static_cast<std::size_t>(k - 1)]), want.odometry))
-          << id << " odometry step " << k;
+      const auto got = dds::FromMsg(sensors[static_cast<std::size_t>(k - 1)]);
+      EXPECT_EQ(got.lidar.stamp.step, static_cast<std::uint32_t>(k)) << id;
+      EXPECT_EQ(got.lidar.stamp.robot_id, id);
+      EXPECT_TRUE(SameLidar(got.lidar, want.lidar)) << id << " lidar step " << k;
+      EXPECT_TRUE(SameImu(got.imu, want.imu)) << id << " imu step " << k;
+      EXPECT_TRUE(SameOdometry(got.odometry, want.odometry)) << id << " odometry step " << k;
     }
   }
   const auto truth = TakeAll<decltype(truth_reader), msg::GroundTruth>(truth_reader);
@@ -177,10 +168,10 @@ TEST(WorldSimRealtimeTest, StaggeredRobotsGetTheirDataSpreadOverTheStep) {
   const auto scenario = common::LoadScenario(scenario_path, sets);
   const testing::TempDir temp_dir("mrslam-staggered");
   dds::Participant participant({kRealtimeDomain, "staggered_test", false});
-  std::vector<std::unique_ptr<dds::Reader<msg::OdometryPubSubType>>> odometry;
+  std::vector<std::unique_ptr<dds::Reader<msg::SensorStepPubSubType>>> sensors;
   std::vector<std::unique_ptr<dds::Writer<msg::StepAckPubSubType>>> acks;
   for (const auto& r : scenario.robots) {
-    odometry.push_back(std::make_unique<dds::Reader<msg::OdometryPubSubType>>(participant, dds::OdometryTopic(r.id)));
+    sensors.push_back(std::make_unique<dds::Reader<msg::SensorStepPubSubType>>(participant, dds::SensorTopic(r.id)));
     acks.push_back(std::make_unique<dds::Writer<msg::StepAckPubSubType>>(participant, dds::AckTopic(r.id)));
   }
   std::vector<std::string> argv = {BinPath("world_sim"),
@@ -198,21 +189,21 @@ TEST(WorldSimRealtimeTest, StaggeredRobotsGetTheirDataSpreadOverTheStep) {
     a.stamp().robot_id(scenario.robots[i].id);
     ASSERT_TRUE(acks[i]->Write(a));  // ready
   }
-  // written[i][k - 1]: when robot i's odometry of step k was written.
-  std::vector<std::vector<std::int64_t>> written(odometry.size());
-  for (std::size_t i = 0; i < odometry.size(); ++i) {
-    msg::Odometry o;
+  // written[i][k - 1]: when robot i's sensor step k was written.
+  std::vector<std::vector<std::int64_t>> written(sensors.size());
+  for (std::size_t i = 0; i < sensors.size(); ++i) {
+    msg::SensorStep o;
     dds::SampleTimes times;
-    while (written[i].size() < kRealtimeSteps && odometry[i]->Take(&o, seconds(20), nullptr, &times)) {
+    while (written[i].size() < kRealtimeSteps && sensors[i]->Take(&o, seconds(20), nullptr, &times)) {
       written[i].push_back(times.written_ns);
     }
     ASSERT_EQ(written[i].size(), static_cast<std::size_t>(kRealtimeSteps))
         << testing::ReadFile(temp_dir.path() + "/world_sim.log");
   }
   ASSERT_EQ(sim.WaitExit(seconds(30)), std::optional<int>(0)) << testing::ReadFile(temp_dir.path() + "/world_sim.log");
-  const double n = static_cast<double>(odometry.size());
+  const double n = static_cast<double>(sensors.size());
   for (int k = 0; k < kRealtimeSteps; ++k) {
-    for (std::size_t i = 1; i < odometry.size(); ++i) {
+    for (std::size_t i = 1; i < sensors.size(); ++i) {
       const double after_ms = static_cast<double>(written[i][k] - written[0][k]) * 1e-6;
       // Robot 0's data leave right after the step's clock; allow it 5 ms of lateness.
       EXPECT_GE(after_ms, static_cast<double>(i) / n * kPeriodMs - 5.0) << "robot " << i << " step " << k + 1;

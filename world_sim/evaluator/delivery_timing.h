@@ -21,10 +21,10 @@ struct DeliverySummary {
 // written by its agent and received here; reports per robot:
 // - latency: received(estimate of step k) - written(step k) - the agent's processing time of the
 //   step, where written(step k) is the later of world_sim's write of the step's truth, which it
-//   writes immediately before the step's clock, and of the robot's first sensor message of the
-//   step, its odometry (each errs high by the gap to the clock or to the lidar, microseconds);
-// - late estimates: estimates of step k written after world_sim wrote step k + 1's first sensor
-//   message for that robot (its odometry), i.e. after the next step's data started to flow.
+//   writes immediately before the step's clock, and of the robot's sensor step (the first errs
+//   high by the gap to the clock, microseconds);
+// - late estimates: estimates of step k written after world_sim wrote the robot's sensor step
+//   k + 1, i.e. after the next step's data started to flow.
 // Times are nanoseconds since the Unix epoch from the system clock, comparable on one host; 0
 // means unknown and leaves the step out. Each robot's estimates come in step order. A time is
 // held only until what it is compared with arrives (or can no longer arrive): per step only each
@@ -46,7 +46,7 @@ class DeliveryTiming {
   struct RobotTiming {
     std::map<std::uint32_t, std::int64_t> sensor_written;    // awaiting the previous step's estimate
     std::map<std::uint32_t, std::int64_t> estimate_written;  // awaiting the next step's sensor data
-    std::map<std::uint32_t, std::int64_t> data_written;      // the step's odometry, awaiting its estimate
+    std::map<std::uint32_t, std::int64_t> data_written;      // the step's sensor step, awaiting its estimate
     std::map<std::uint32_t, std::int64_t> arrival_ns;        // received - processing, awaiting the step
     bool any_estimate = false;
     std::uint32_t newest_estimate = 0;

@@ -46,20 +46,21 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
              const std::string& out_dir, const std::atomic<bool>& stop) {
   using Clock = std::chrono::steady_clock;
   // Each wake-up costs a context switch; on MRCLAM's --shm replay some 1,600 samples a second
-  // arrive (five robots' estimates and odometry, the truth).
+  // arrive (five robots' estimates and sensor steps, the truth).
   constexpr auto kGather = std::chrono::milliseconds(5);
   const auto start = Clock::now();
   dds::Participant participant(dds_options);
   dds::Notifier notifier;
   dds::Reader<msg::GroundTruthPubSubType> truth_reader(participant, dds::kTruthTopic, &notifier);
   std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimate_readers;
-  std::map<std::string, std::unique_ptr<dds::Reader<msg::OdometryPubSubType>>> odometry_readers;
+  // Each robot's sensor steps, for the odometry (dead reckoning) and when the robot's data left.
+  std::map<std::string, std::unique_ptr<dds::Reader<msg::SensorStepPubSubType>>> sensor_readers;
   std::map<std::string, std::unique_ptr<dds::Reader<msg::FinalTrajectoryPubSubType>>> final_readers;
   for (const auto& r : scenario.robots) {
     estimate_readers[r.id] =
         std::make_unique<dds::Reader<msg::EstimatePubSubType>>(participant, dds::EstimateTopic(r.id), &notifier);
-    odometry_readers[r.id] =
-        std::make_unique<dds::Reader<msg::OdometryPubSubType>>(participant, dds::OdometryTopic(r.id), &notifier);
+    sensor_readers[r.id] =
+        std::make_unique<dds::Reader<msg::SensorStepPubSubType>>(participant, dds::SensorTopic(r.id), &notifier);
     final_readers[r.id] = std::make_unique<dds::Reader<msg::FinalTrajectoryPubSubType>>(
         participant, dds::FinalTrajectoryTopic(r.id), &notifier);
   }
@@ -92,9 +93,10 @@ int Evaluate(const common::ScenarioOptions& scenario, const dds::ParticipantOpti
         evaluator.AddEstimate(id, estimate);
       }
     }
-    for (auto& [id, reader] : odometry_readers) {
-      msg::Odometry o;
-      while (reader->TryTake(&o, nullptr, &times)) evaluator.AddOdometry(id, dds::FromMsg(o), times.written_ns);
+    for (auto& [id, reader] : sensor_readers) {
+      msg::SensorStep o;
+      while (reader->TryTake(&o, nullptr, &times))
+        evaluator.AddOdometry(id, dds::FromMsg(o).odometry, times.written_ns);
     }
     for (auto& [id, reader] : final_readers) {
       msg::FinalTrajectory f;

@@ -49,6 +49,7 @@ class RunEvaluator {
   // A second estimate of a step already scored (an agent that came back and published it again)
   // is left out.
   void AddEstimate(const std::string& robot_id, const RobotEstimate& estimate);
+  // A robot's odometry of a step; written_ns: when its sensor step was written.
   void AddOdometry(const std::string& robot_id, const common::Odometry& odometry, std::int64_t written_ns = 0);
   // A chunk (0..chunks-1) of a robot's final trajectory.
   void AddFinalTrajectory(const std::string& robot_id, std::uint32_t chunk, std::vector<FinalPose> poses);

@@ -22,11 +22,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
-struct RobotWriters {
-  std::unique_ptr<dds::Writer<msg::LidarScanPubSubType>> lidar;
-  std::unique_ptr<dds::Writer<msg::ImuPubSubType>> imu;
-  std::unique_ptr<dds::Writer<msg::OdometryPubSubType>> odometry;
-};
+using SensorWriter = dds::Writer<msg::SensorStepPubSubType>;
+
 // The scenario's source: the simulated world, or a recorded data set when replay is set.
 std::unique_ptr<StepSource> MakeSource(const common::ScenarioOptions& s) {
   auto source = MakeStepSource(s);
@@ -45,7 +42,7 @@ struct SimNode::Impl {
   std::unique_ptr<StepSource> source;
   StepSource& world;
   dds::Participant participant;
-  std::map<std::string, RobotWriters> writers;
+  std::map<std::string, std::unique_ptr<SensorWriter>> writers;
   std::unique_ptr<dds::Writer<msg::GroundTruthPubSubType>> truth;
   std::unique_ptr<dds::Writer<msg::StepClockPubSubType>> clock;
   std::map<std::string, std::unique_ptr<dds::Reader<msg::StepAckPubSubType>>> acks;
@@ -56,12 +53,7 @@ struct SimNode::Impl {
         source(MakeSource(s)),
         world(*source),
         participant({o.domain, "world_sim", o.shared_memory, o.security_dir, "world_sim", s.run.history_steps}) {
-    for (const auto& r : s.robots) {
-      auto& w = writers[r.id];
-      w.lidar = std::make_unique<dds::Writer<msg::LidarScanPubSubType>>(participant, dds::LidarTopic(r.id));
-      w.imu = std::make_unique<dds::Writer<msg::ImuPubSubType>>(participant, dds::ImuTopic(r.id));
-      w.odometry = std::make_unique<dds::Writer<msg::OdometryPubSubType>>(participant, dds::OdometryTopic(r.id));
-    }
+    for (const auto& r : s.robots) writers[r.id] = std::make_unique<SensorWriter>(participant, dds::SensorTopic(r.id));
     truth = std::make_unique<dds::Writer<msg::GroundTruthPubSubType>>(participant, dds::kTruthTopic);
     clock = std::make_unique<dds::Writer<msg::StepClockPubSubType>>(participant, dds::kClockTopic);
     for (const auto& id : o.agents) {
@@ -129,13 +121,10 @@ struct SimNode::Impl {
     return true;
   }
 
-  // Robot i's odometry, IMU and lidar of the step.
+  // Robot i's sensor step (odometry, IMU and lidar in one message).
   void PublishRobot(std::size_t i, const common::SensorStep& sample) {
     const auto& id = scenario.robots[i].id;
-    auto& w = writers.at(id);
-    WriteOrThrow(*w.odometry, dds::ToMsg(sample.odometry), id + " odometry");
-    WriteOrThrow(*w.imu, dds::ToMsg(sample.imu), id + " imu");
-    WriteOrThrow(*w.lidar, dds::ToMsg(sample.lidar), id + " lidar");
+    WriteOrThrow(*writers.at(id), dds::ToMsg(sample), id + "'s sensor step");
   }
 
   // The step's truth and clock.
@@ -241,7 +230,7 @@ bool SimNode::Run(const std::atomic<bool>& stop) {
   // Let every matched reader (the evaluator) receive everything before the writers go away.
   const auto drain = std::chrono::duration_cast<milliseconds>(std::chrono::duration<double>(s.options.drain_timeout_s));
   bool drained = s.truth->WaitForAcknowledgments(drain) && s.clock->WaitForAcknowledgments(drain);
-  for (auto& [id, w] : s.writers) drained = w.odometry->WaitForAcknowledgments(drain) && drained;
+  for (auto& [id, w] : s.writers) drained = w->WaitForAcknowledgments(drain) && drained;
   if (!drained) {
     spdlog::warn("some readers did not acknowledge every sample within {} s", s.options.drain_timeout_s);
   }
