@@ -584,8 +584,10 @@ struct AgentNode::Impl {
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));
     // The peers' messages after the estimate: they do not delay it (a first message to a peer
-    // creates the writers toward it).
-    Acknowledge(k, time_s, Send(to_peers));
+    // creates the writers toward it). Only lockstep waits for the acknowledgement (realtime's
+    // clock waits for nobody and announces no peer message).
+    const auto sent = Send(to_peers);
+    if (options.lockstep) Acknowledge(k, time_s, sent);
     ++counters.steps_processed;
     ++next_step;
     if (*last) {
