@@ -1,8 +1,7 @@
 // libFuzzer harness: any bytes a writer could put on an agent's sensor topic or the step clock
 // (the first byte picks the message type, even a sensor step, odd a clock; the rest is its CDR
-// payload) go through the agent's
-// intake — decoding, conversion, stamp check, sanitizing, buffering by step — without a crash,
-// a hang or a leak.
+// payload) go through the agent's intake — decoding, conversion, stamp check, sanitizing,
+// buffering by step — without a crash, a hang or a leak.
 #include <cstddef>
 #include <cstdint>
 
