@@ -122,12 +122,16 @@ void SetDepth(int depth, Qos* qos) {
 
 }  // namespace
 
-fdds::DataWriterQos Participant::WriterQos(History history) const {
+fdds::DataWriterQos Participant::WriterQos(History history, Acknowledgment acknowledgment) const {
   fdds::DataWriterQos qos;
   if (publisher_->get_datawriter_qos_from_profile(kWriterProfile, qos) != ReturnCode_t::RETCODE_OK) {
     throw DdsError(std::string("DDS writer profile '") + kWriterProfile + "' missing from " + ProfilesPath());
   }
   if (history == History::kRecent && history_steps_ > 0) SetDepth(history_steps_, &qos);
+  if (acknowledgment == Acknowledgment::kPerSecond) {
+    qos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(1, 0);
+    qos.reliable_writer_qos().disable_heartbeat_piggyback = true;
+  }
   return qos;
 }
 

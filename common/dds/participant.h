@@ -62,6 +62,14 @@ struct ParticipantOptions {
 // the end, e.g. a final trajectory in chunks) the profiles' whole-run depth.
 enum class History { kRecent, kWhole };
 
+// When a writer asks its readers to acknowledge. kPrompt: a heartbeat 20 ms after a sample not yet
+// acknowledged (the profiles'), and one with every sample once the history is full. kPerSecond: one
+// heartbeat a second and none with the samples, for a stream written every step of a realtime run,
+// where nothing waits for an acknowledgement before the run's end: a heartbeat and an
+// acknowledgement per sample would triple the datagrams (docs/dds.md). A lost sample is then sent
+// again within a second.
+enum class Acknowledgment { kPrompt, kPerSecond };
+
 // Owns one DomainParticipant, its publisher, subscriber and topics; deletes everything it
 // created on destruction. With a security folder, checks the identity's files first (one-line
 // DdsError naming the file and the problem) and joins with DDS-Security on. Not copyable. Writers and readers it makes
@@ -81,7 +89,8 @@ class Participant {
   eprosima::fastdds::dds::Topic* GetTopic(const std::string& name, const eprosima::fastdds::dds::TypeSupport& type);
 
   // The profiles' writer and reader QoS with the history depth `history` asks for.
-  eprosima::fastdds::dds::DataWriterQos WriterQos(History history) const;
+  eprosima::fastdds::dds::DataWriterQos WriterQos(History history,
+                                                  Acknowledgment acknowledgment = Acknowledgment::kPrompt) const;
   eprosima::fastdds::dds::DataReaderQos ReaderQos(History history) const;
 
  private:
@@ -100,10 +109,11 @@ template <typename PubSubType>
 class Writer {
  public:
   using Msg = typename PubSubType::type;
-  Writer(Participant& participant, const std::string& topic, History history = History::kRecent)
+  Writer(Participant& participant, const std::string& topic, History history = History::kRecent,
+         Acknowledgment acknowledgment = Acknowledgment::kPrompt)
       : participant_(participant) {
     auto* t = participant.GetTopic(topic, eprosima::fastdds::dds::TypeSupport(new PubSubType()));
-    writer_ = participant.publisher()->create_datawriter(t, participant.WriterQos(history));
+    writer_ = participant.publisher()->create_datawriter(t, participant.WriterQos(history, acknowledgment));
     if (writer_ == nullptr) throw DdsError("cannot create a writer on topic '" + topic + "'");
   }
   // The history is emptied first: Fast DDS 2.9's writer deletion releases the samples one by one

@@ -74,7 +74,9 @@ struct AgentNode::Impl {
             {o.domain, "robot_agent/" + a.robot_id, o.shared_memory, o.security_dir, a.robot_id, o.history_steps}),
         sensor_reader(participant, dds::SensorTopic(a.robot_id), &notifier),
         clock_reader(participant, dds::kClockTopic, &notifier),
-        estimate_writer(participant, dds::EstimateTopic(a.robot_id)),
+        // In realtime the estimates are acknowledged once a second (participant.h).
+        estimate_writer(participant, dds::EstimateTopic(a.robot_id), dds::History::kRecent,
+                        o.lockstep ? dds::Acknowledgment::kPrompt : dds::Acknowledgment::kPerSecond),
         ack_writer(participant, dds::AckTopic(a.robot_id)),
         final_writer(participant, dds::FinalTrajectoryTopic(a.robot_id), dds::History::kWhole),
         cooperation(a),

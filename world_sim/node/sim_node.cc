@@ -53,9 +53,16 @@ struct SimNode::Impl {
         source(MakeSource(s)),
         world(*source),
         participant({o.domain, "world_sim", o.shared_memory, o.security_dir, "world_sim", s.run.history_steps}) {
-    for (const auto& r : s.robots) writers[r.id] = std::make_unique<SensorWriter>(participant, dds::SensorTopic(r.id));
-    truth = std::make_unique<dds::Writer<msg::GroundTruthPubSubType>>(participant, dds::kTruthTopic);
-    clock = std::make_unique<dds::Writer<msg::StepClockPubSubType>>(participant, dds::kClockTopic);
+    // In realtime the streams written every step are acknowledged once a second (participant.h).
+    const auto ack =
+        s.run.mode == common::RunMode::kRealtime ? dds::Acknowledgment::kPerSecond : dds::Acknowledgment::kPrompt;
+    for (const auto& r : s.robots) {
+      writers[r.id] = std::make_unique<SensorWriter>(participant, dds::SensorTopic(r.id), dds::History::kRecent, ack);
+    }
+    truth = std::make_unique<dds::Writer<msg::GroundTruthPubSubType>>(participant, dds::kTruthTopic,
+                                                                      dds::History::kRecent, ack);
+    clock = std::make_unique<dds::Writer<msg::StepClockPubSubType>>(participant, dds::kClockTopic,
+                                                                    dds::History::kRecent, ack);
     for (const auto& id : o.agents) {
       acks[id] = std::make_unique<dds::Reader<msg::StepAckPubSubType>>(participant, dds::AckTopic(id));
     }
