@@ -95,14 +95,16 @@ Participant::~Participant() {
   fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
 }
 
-fdds::Topic* Participant::GetTopic(const std::string& name, const fdds::TypeSupport& type) {
-  if (auto it = topics_.find(name); it != topics_.end()) return it->second;
-  const std::string& type_name = type.get_type_name();
-  if (participant_->find_type(type_name).empty()) {
-    if (type.register_type(participant_) != ReturnCode_t::RETCODE_OK) {
-      throw DdsError("cannot register DDS type '" + type_name + "'");
-    }
+std::string Participant::RegisterType(const fdds::TypeSupport& type) {
+  std::string type_name = type.get_type_name();
+  if (participant_->find_type(type_name).empty() && type.register_type(participant_) != ReturnCode_t::RETCODE_OK) {
+    throw DdsError("cannot register DDS type '" + type_name + "'");
   }
+  return type_name;
+}
+
+fdds::Topic* Participant::GetTopic(const std::string& name, const std::string& type_name) {
+  if (auto it = topics_.find(name); it != topics_.end()) return it->second;
   auto* topic = participant_->create_topic(name, type_name, fdds::TOPIC_QOS_DEFAULT);
   if (topic == nullptr) throw DdsError("cannot create DDS topic '" + name + "'");
   topics_[name] = topic;

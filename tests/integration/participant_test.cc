@@ -1,5 +1,6 @@
 // The QoS a participant gives its writers and transports, as built from config/dds_profiles.xml:
-// the history depth per stream, when readers acknowledge, and the UDP socket sizes.
+// the history depth per stream, when readers acknowledge, and the UDP socket sizes; and the type
+// supports it constructs.
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -7,6 +8,7 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
 #include "common/dds/participant.h"
+#include "mrslamPubSubTypes.h"
 
 namespace mrslam {
 namespace {
@@ -17,12 +19,12 @@ constexpr int kHistorySteps = 50;
 dds::ParticipantOptions Options() {
   dds::ParticipantOptions options;
   options.domain = kDomain;
-  options.name = "participant_qos_test";
+  options.name = "participant_test";
   options.history_steps = kHistorySteps;
   return options;
 }
 
-TEST(ParticipantQosTest, PromptWritersTakeTheProfilesHeartbeatAndPiggyback) {
+TEST(ParticipantTest, PromptWritersTakeTheProfilesHeartbeatAndPiggyback) {
   dds::Participant participant(Options());
   const auto qos = participant.WriterQos(dds::History::kRecent);
   EXPECT_EQ(qos.history().depth, kHistorySteps);
@@ -30,7 +32,7 @@ TEST(ParticipantQosTest, PromptWritersTakeTheProfilesHeartbeatAndPiggyback) {
   EXPECT_FALSE(qos.reliable_writer_qos().disable_heartbeat_piggyback);
 }
 
-TEST(ParticipantQosTest, PerSecondWritersHeartbeatOnceASecondAndNeverWithASample) {
+TEST(ParticipantTest, PerSecondWritersHeartbeatOnceASecondAndNeverWithASample) {
   dds::Participant participant(Options());
   const auto qos = participant.WriterQos(dds::History::kRecent, dds::Acknowledgment::kPerSecond);
   EXPECT_EQ(qos.history().depth, kHistorySteps);
@@ -40,14 +42,14 @@ TEST(ParticipantQosTest, PerSecondWritersHeartbeatOnceASecondAndNeverWithASample
   EXPECT_EQ(qos.durability().kind, eprosima::fastdds::dds::TRANSIENT_LOCAL_DURABILITY_QOS);
 }
 
-TEST(ParticipantQosTest, WholeRunStreamsKeepTheProfilesDepth) {
+TEST(ParticipantTest, WholeRunStreamsKeepTheProfilesDepth) {
   dds::Participant participant(Options());
   EXPECT_EQ(participant.WriterQos(dds::History::kWhole).history().depth, 20000);
   EXPECT_EQ(participant.ReaderQos(dds::History::kWhole).history().depth, 20000);
   EXPECT_EQ(participant.ReaderQos(dds::History::kRecent).history().depth, kHistorySteps);
 }
 
-TEST(ParticipantQosTest, UdpSocketsAskForFourMebibytes) {
+TEST(ParticipantTest, UdpSocketsAskForFourMebibytes) {
   dds::Participant participant(Options());
   const auto& transports = participant.get()->get_qos().transport().user_transports;
   int udp = 0;
@@ -59,6 +61,24 @@ TEST(ParticipantQosTest, UdpSocketsAskForFourMebibytes) {
     EXPECT_EQ(d->sendBufferSize, 4u << 20);
   }
   EXPECT_EQ(udp, 1);
+}
+
+// A factor batch's type support that counts its constructions.
+int constructed = 0;
+struct CountedFactorBatchType : msg::FactorBatchPubSubType {
+  CountedFactorBatchType() { ++constructed; }
+};
+
+TEST(ParticipantTest, ATypeSupportIsConstructedOncePerParticipant) {
+  dds::Participant participant(Options());
+  constructed = 0;
+  {
+    const dds::Reader<CountedFactorBatchType> from_r2(participant, dds::PeerTopic("r1", "r2", "factors"));
+    const dds::Reader<CountedFactorBatchType> from_r3(participant, dds::PeerTopic("r1", "r3", "factors"));
+    const dds::Writer<CountedFactorBatchType> to_r2(participant, dds::PeerTopic("r2", "r1", "factors"));
+  }
+  const dds::Reader<CountedFactorBatchType> again(participant, dds::PeerTopic("r1", "r2", "factors"));
+  EXPECT_EQ(constructed, 1);
 }
 
 }  // namespace
