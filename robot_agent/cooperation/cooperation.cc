@@ -249,47 +249,86 @@ void Cooperation::Receive(const PeerInbox& inbox, filters::SlamFilter* filter) {
   for (auto& [id, peer] : peers_) {
     if (!peer.peer_measurements.empty()) PairMutualDetections(id, filter);
   }
-  // 3. Map snapshots (after the transforms of this call are known).
+  // 3. Map snapshots (after the transforms of this call are known); first those held until the
+  //    sender's frame became known.
+  ApplyEarlyMessages(filter);
   for (const auto& m : inbox.maps) {
     if (!SnapshotValid(m)) {
       Reject();
       continue;
     }
-    const auto it = peers_.find(m.header.sender);
-    if (it == peers_.end() || !it->second.transform ||
-        (it->second.last_snapshot_step && m.header.step < *it->second.last_snapshot_step)) {
-      RejectStale();  // the sender's frame is not known yet, or stale
+    PeerState& sender = peers_[m.header.sender];
+    if (!sender.transform) {
+      sender.early_snapshot = m;  // held, the newest only
       continue;
     }
-    it->second.last_snapshot_step = m.header.step;
-    ApplySnapshot(m, filter);
+    ApplySnapshotInOrder(m, filter);
   }
-  // 4. Landmark-moved notices: the position moves into the own frame through the transform to
-  //    the sender, p = R(theta) p_s + t, with covariance J_T Sigma_T J_T^T (J_T = d p / d(t, theta));
-  //    the filter drops the landmark it gates to (filters that track motion ignore notices).
+  // 4. Landmark-moved notices.
   for (const auto& n : inbox.moved) {
     PeerState* peer = HeaderValid(n.header) ? &peers_[n.header.sender] : nullptr;
     if (peer == nullptr || !n.position_in_sender.allFinite()) {
       Reject();
       continue;
     }
-    if (!peer->transform || (peer->last_notice_step && n.header.step < *peer->last_notice_step)) {
-      RejectStale();  // the sender's frame is not known yet, or stale
+    if (!peer->transform) {
+      HoldEarlyNotice(peer, n);
       continue;
     }
-    peer->last_notice_step = n.header.step;
-    ++moved_notices_;
-    const common::Pose2& t = peer->transform->t;
-    const Eigen::Vector2d p = common::TransformPoint(t, n.position_in_sender);
-    Eigen::Matrix<double, 2, 3> j;
-    j << 1.0, 0.0, -(p.y() - t.y), 0.0, 1.0, p.x() - t.x;
-    const Eigen::Matrix2d cov = j * peer->transform->Covariance() * j.transpose();
-    filter->ApplyMovedNotice(p, cov, options_.cooperation.match_gate_probability);
+    ApplyNoticeInOrder(n, filter);
   }
   // 5. Raw measurements shared: each batch whole or not at all.
   for (const auto& b : inbox.factors) {
     if (!options_.cooperation.share_factors || !HeaderValid(b.header) || !exchange_.Receive(b)) Reject();
   }
+}
+
+void Cooperation::ApplyEarlyMessages(filters::SlamFilter* filter) {
+  for (auto& [id, peer] : peers_) {
+    if (!peer.transform) continue;
+    if (peer.early_snapshot) {
+      const MapSnapshot m = std::move(*peer.early_snapshot);
+      peer.early_snapshot.reset();
+      ApplySnapshotInOrder(m, filter);
+    }
+    const std::vector<LandmarkMovedNotice> notices = std::move(peer.early_notices);
+    peer.early_notices.clear();
+    for (const auto& n : notices) ApplyNoticeInOrder(n, filter);
+  }
+}
+
+void Cooperation::HoldEarlyNotice(PeerState* peer, const LandmarkMovedNotice& n) {
+  peer->early_notices.push_back(n);
+  if (peer->early_notices.size() > kMaxEarlyNotices) peer->early_notices.erase(peer->early_notices.begin());
+}
+
+void Cooperation::ApplySnapshotInOrder(const MapSnapshot& m, filters::SlamFilter* filter) {
+  PeerState& sender = peers_[m.header.sender];
+  if (sender.last_snapshot_step && m.header.step < *sender.last_snapshot_step) {
+    RejectStale();
+    return;
+  }
+  sender.last_snapshot_step = m.header.step;
+  ApplySnapshot(m, filter);
+}
+
+void Cooperation::ApplyNoticeInOrder(const LandmarkMovedNotice& n, filters::SlamFilter* filter) {
+  // The position moves into the own frame through the transform to the sender,
+  // p = R(theta) p_s + t, with covariance J_T Sigma_T J_T^T (J_T = d p / d(t, theta)); the filter
+  // drops the landmark it gates to (filters that track motion ignore notices).
+  PeerState& peer = peers_[n.header.sender];
+  if (peer.last_notice_step && n.header.step < *peer.last_notice_step) {
+    RejectStale();
+    return;
+  }
+  peer.last_notice_step = n.header.step;
+  ++moved_notices_;
+  const common::Pose2& t = peer.transform->t;
+  const Eigen::Vector2d p = common::TransformPoint(t, n.position_in_sender);
+  Eigen::Matrix<double, 2, 3> j;
+  j << 1.0, 0.0, -(p.y() - t.y), 0.0, 1.0, p.x() - t.x;
+  const Eigen::Matrix2d cov = j * peer.transform->Covariance() * j.transpose();
+  filter->ApplyMovedNotice(p, cov, options_.cooperation.match_gate_probability);
 }
 
 void Cooperation::PairMutualDetections(const std::string& peer_id, filters::SlamFilter* filter) {

@@ -60,9 +60,10 @@ class Cooperation {
   // held, or the step of the last map snapshot merged, whichever is later).
   std::map<std::string, std::uint32_t> data_held() const;
   // Peer messages rejected so far: malformed ones and, among them counted apart, those only out of
-  // order (stale_messages: older than one already applied from the sender, or a snapshot or
-  // notice from a peer whose frame is not known yet, as happens in realtime when a message
-  // overtakes the detections that make the rendezvous).
+  // order (stale_messages: older than one already applied from the sender). A snapshot or notice
+  // from a peer whose frame is not known yet, as happens in realtime when it overtakes the
+  // detections that make the rendezvous, is held until the frame is known (the newest snapshot
+  // and kMaxEarlyNotices notices per peer).
   int rejected_messages() const;
   int stale_messages() const { return stale_; }
   // Every transform estimated jointly from both robots' histories (cooperation.joint_transform),
@@ -104,6 +105,7 @@ class Cooperation {
     void Io(common::Archive& ar) { ar(range_m, bearing_rad, pose, covariance); }
   };
   static constexpr std::uint32_t kEncounterRefineSteps = 10;
+  static constexpr std::size_t kMaxEarlyNotices = 16;  // held per peer before its frame is known
 
   // Everything known about one peer.
   struct PeerState {
@@ -127,11 +129,16 @@ class Cooperation {
     // The last step applied per message kind (older ones are stale).
     std::optional<std::uint32_t> last_measurement_step, last_snapshot_step, last_notice_step;
     std::map<int, TrackLink> tracks;  // its tracks in its snapshots (LinkTracks)
+    // Come before its frame is known (in realtime a snapshot can overtake the detections that
+    // make the rendezvous): held until it is, the newest snapshot and the newest notices.
+    std::optional<MapSnapshot> early_snapshot;
+    std::vector<LandmarkMovedNotice> early_notices;
 
     void Io(common::Archive& ar) {
       ar(transform, met, last_detection_outlier, transform_step, own_detections, peer_measurements, in_encounter,
          encounter_first, encounter_last, encounter_pairs, event_index, last_rendezvous_step, snapshot_due,
-         transforms_due, last_measurement_step, last_snapshot_step, last_notice_step, tracks);
+         transforms_due, last_measurement_step, last_snapshot_step, last_notice_step, tracks, early_snapshot,
+         early_notices);
     }
   };
 
@@ -146,6 +153,13 @@ class Cooperation {
   void ApplyMutualDetection(const std::string& peer, std::uint32_t own_step, const OwnDetection& own,
                             const RelativeMeasurement& theirs, filters::SlamFilter* filter);
   void ApplySnapshot(const MapSnapshot& m, filters::SlamFilter* filter);
+  // A snapshot or notice from a peer whose frame is known: stale if older than the last of its
+  // kind applied from that peer, else applied.
+  void ApplySnapshotInOrder(const MapSnapshot& m, filters::SlamFilter* filter);
+  void ApplyNoticeInOrder(const LandmarkMovedNotice& n, filters::SlamFilter* filter);
+  // The messages held from peers whose frames are now known, applied in order.
+  void ApplyEarlyMessages(filters::SlamFilter* filter);
+  void HoldEarlyNotice(PeerState* peer, const LandmarkMovedNotice& n);
   // The landmarks both maps hold: the own and the snapshot's (at the same step; those that came
   // from the other side by provenance left out), matched through the held transform.
   struct CommonLandmarks {
