@@ -303,13 +303,16 @@ void Cooperation::HoldEarlyNotice(PeerState* peer, const LandmarkMovedNotice& n)
 }
 
 void Cooperation::ApplySnapshotInOrder(const MapSnapshot& m, filters::SlamFilter* filter) {
-  PeerState& sender = peers_[m.header.sender];
-  if (sender.last_snapshot_step && m.header.step < *sender.last_snapshot_step) {
+  if (InOrder(&peers_[m.header.sender].last_snapshot_step, m.header.step)) ApplySnapshot(m, filter);
+}
+
+bool Cooperation::InOrder(std::optional<std::uint32_t>* last_step, std::uint32_t step) {
+  if (*last_step && step < **last_step) {
     RejectStale();
-    return;
+    return false;
   }
-  sender.last_snapshot_step = m.header.step;
-  ApplySnapshot(m, filter);
+  *last_step = step;
+  return true;
 }
 
 void Cooperation::ApplyNoticeInOrder(const LandmarkMovedNotice& n, filters::SlamFilter* filter) {
@@ -317,11 +320,7 @@ void Cooperation::ApplyNoticeInOrder(const LandmarkMovedNotice& n, filters::Slam
   // p = R(theta) p_s + t, with covariance J_T Sigma_T J_T^T (J_T = d p / d(t, theta)); the filter
   // drops the landmark it gates to (filters that track motion ignore notices).
   PeerState& peer = peers_[n.header.sender];
-  if (peer.last_notice_step && n.header.step < *peer.last_notice_step) {
-    RejectStale();
-    return;
-  }
-  peer.last_notice_step = n.header.step;
+  if (!InOrder(&peer.last_notice_step, n.header.step)) return;
   ++moved_notices_;
   const common::Pose2& t = peer.transform->t;
   const Eigen::Vector2d p = common::TransformPoint(t, n.position_in_sender);

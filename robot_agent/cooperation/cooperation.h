@@ -160,6 +160,9 @@ class Cooperation {
   // The messages held from peers whose frames are now known, applied in order.
   void ApplyEarlyMessages(filters::SlamFilter* filter);
   void HoldEarlyNotice(PeerState* peer, const LandmarkMovedNotice& n);
+  // Whether a message of `step` may be applied after the last of its kind (*last_step, then set
+  // to step); an older one is counted stale.
+  bool InOrder(std::optional<std::uint32_t>* last_step, std::uint32_t step);
   // The landmarks both maps hold: the own and the snapshot's (at the same step; those that came
   // from the other side by provenance left out), matched through the held transform.
   struct CommonLandmarks {
