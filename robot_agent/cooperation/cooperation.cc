@@ -259,7 +259,7 @@ void Cooperation::Receive(const PeerInbox& inbox, filters::SlamFilter* filter) {
     }
     PeerState& sender = peers_[m.header.sender];
     if (!sender.transform) {
-      sender.early_snapshot = m;  // held, the newest only
+      HoldEarlySnapshot(&sender, m);
       continue;
     }
     ApplySnapshotInOrder(m, filter);
@@ -295,6 +295,10 @@ void Cooperation::ApplyEarlyMessages(filters::SlamFilter* filter) {
     peer.early_notices.clear();
     for (const auto& n : notices) ApplyNoticeInOrder(n, filter);
   }
+}
+
+void Cooperation::HoldEarlySnapshot(PeerState* peer, const MapSnapshot& m) {
+  if (!peer->early_snapshot || m.header.step >= peer->early_snapshot->header.step) peer->early_snapshot = m;
 }
 
 void Cooperation::HoldEarlyNotice(PeerState* peer, const LandmarkMovedNotice& n) {

@@ -159,6 +159,9 @@ class Cooperation {
   void ApplyNoticeInOrder(const LandmarkMovedNotice& n, filters::SlamFilter* filter);
   // The messages held from peers whose frames are now known, applied in order.
   void ApplyEarlyMessages(filters::SlamFilter* filter);
+  // Hold a message from a peer whose frame is not known yet: the newest snapshot, and the
+  // kMaxEarlyNotices newest notices.
+  void HoldEarlySnapshot(PeerState* peer, const MapSnapshot& m);
   void HoldEarlyNotice(PeerState* peer, const LandmarkMovedNotice& n);
   // Whether a message of `step` may be applied after the last of its kind (*last_step, then set
   // to step); an older one is counted stale.

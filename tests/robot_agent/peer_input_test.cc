@@ -256,6 +256,10 @@ TEST(EarlyPeerMessages, AreAppliedOnceTheSendersFrameIsKnown) {
   notice.header = {"r2", "r1", early.step(), 0.65 * early.step(), 2};
   notice.position_in_sender = {1.0, 2.0};
   early.agent(0).Receive({{}, {snapshot}, {notice}, {}}, &early.filter(0));
+  MapSnapshot older = snapshot;  // overtaken in turn: the newer one stays held
+  older.header.step -= 1;
+  older.landmarks[0].mean = {-10.0, -10.0, 0.0};
+  early.agent(0).Receive({{}, {older}, {}, {}}, &early.filter(0));
   EXPECT_EQ(early.agent(0).rejected_messages(), 0);
   EXPECT_EQ(early.filter(0).merges, 0);
   EXPECT_TRUE(early.filter(0).notices.empty());
@@ -273,6 +277,11 @@ TEST(EarlyPeerMessages, AreAppliedOnceTheSendersFrameIsKnown) {
   // Within 1 m: 14 m from r1, where a hundredth of a radian of the transform's heading is 0.14 m.
   EXPECT_TRUE(std::any_of(mapped.begin(), mapped.end(),
                           [&](const filters::MapLandmark& l) { return (l.mean.head<2>() - far_truth).norm() < 1.0; }));
+  const Eigen::Vector2d older_truth =
+      common::TransformPoint(early.TrueTransform(0, 1), older.landmarks[0].mean.head<2>());
+  EXPECT_TRUE(std::none_of(mapped.begin(), mapped.end(), [&](const filters::MapLandmark& l) {
+    return (l.mean.head<2>() - older_truth).norm() < 1.0;
+  }));
 }
 
 TEST_F(HostileInput, MovedNoticeReachesTheFilterInTheOwnFrame) {
