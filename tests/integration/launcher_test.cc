@@ -197,6 +197,9 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     // the simulator waits for every estimate, so none comes after the next step's data.
     ExpectFiniteAtLeast(r, "latency_us_median", 1.0, id);
     EXPECT_GE(r["latency_us_p99"].get<double>(), r["latency_us_median"].get<double>()) << id;
+    // The estimate's own hop is a part of the latency: positive, and below the whole.
+    ExpectFiniteAtLeast(r, "estimate_hop_us_median", 1.0, id);
+    EXPECT_LT(r["estimate_hop_us_median"].get<double>(), r["latency_us_p99"].get<double>()) << id;
     EXPECT_EQ(r.value("late_estimates", -1), 0) << id;
     EXPECT_LT(r["position_rmse_m"].get<double>(), 20.0) << id;  // 12 steps of 0.65 m: a sanity bound
     EXPECT_LT(r["heading_rmse_deg"].get<double>(), 180.0) << id;

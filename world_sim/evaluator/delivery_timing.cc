@@ -50,6 +50,8 @@ void DeliveryTiming::SensorWritten(const std::string& robot_id, std::uint32_t st
 void DeliveryTiming::EstimateDelivered(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns,
                                        std::int64_t received_ns, double processing_ms) {
   RobotTiming& robot = robots_.at(robot_id);
+  if (received_ns > 0 && written_ns > 0)
+    robot.estimate_hop_us.push_back(static_cast<double>(received_ns - written_ns) * 1e-3);
   if (received_ns > 0) {
     // Nanoseconds since the epoch exceed a double's exact integers: differences first.
     robot.arrival_ns[step] = received_ns - std::llround(processing_ms * 1e6);
@@ -111,6 +113,7 @@ DeliverySummary DeliveryTiming::Summary(const std::string& robot_id) const {
     out.latency_us_median = Median(robot->second.latency_us);
     out.latency_us_p99 = Percentile(robot->second.latency_us, 99.0);
   }
+  if (!robot->second.estimate_hop_us.empty()) out.estimate_hop_us_median = Median(robot->second.estimate_hop_us);
   return out;
 }
 

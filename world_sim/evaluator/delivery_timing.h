@@ -13,6 +13,7 @@ namespace mrslam::evaluator {
 struct DeliverySummary {
   double latency_us_median = 0.0;
   double latency_us_p99 = 0.0;
+  double estimate_hop_us_median = 0.0;  // received(estimate) - written(estimate)
   int late_estimates = 0;
   std::size_t timed_steps = 0;  // the steps whose latency is known
 };
@@ -24,7 +25,9 @@ struct DeliverySummary {
 //   writes immediately before the step's clock, and of the robot's sensor step (the first errs
 //   high by the gap to the clock, microseconds);
 // - late estimates: estimates of step k written after world_sim wrote the robot's sensor step
-//   k + 1, i.e. after the next step's data started to flow.
+//   k + 1, i.e. after the next step's data started to flow;
+// - the estimate's hop: received(estimate) - written(estimate), the DDS hop from the agent's write
+//   to this process (a part of the latency, and its yardstick: the data's hop in is another).
 // Times are nanoseconds since the Unix epoch from the system clock, comparable on one host; 0
 // means unknown and leaves the step out. Each robot's estimates come in step order. A time is
 // held only until what it is compared with arrives (or can no longer arrive): per step only each
@@ -51,6 +54,7 @@ class DeliveryTiming {
     bool any_estimate = false;
     std::uint32_t newest_estimate = 0;
     std::vector<double> latency_us;
+    std::vector<double> estimate_hop_us;
     int late = 0;
   };
   // Judges whether the estimate of step k was late, if both times are known; lets them go.
