@@ -366,6 +366,7 @@ void ParseSmoother(Section& filter, robot_agent::SmootherOptions* d) {
   d->window_keyframes = s.Get("window_keyframes", d->window_keyframes);
   d->max_keyframe_gap_steps = s.Get("max_keyframe_gap_steps", d->max_keyframe_gap_steps);
   d->relinearize_threshold = s.Get("relinearize_threshold", d->relinearize_threshold);
+  d->relinearize_delay_steps = s.Get("relinearize_delay_steps", d->relinearize_delay_steps);
   d->front_end_particles = s.Get("front_end_particles", d->front_end_particles);
   d->max_iterations = s.Get("max_iterations", d->max_iterations);
   d->huber_k = s.Get("huber_k", d->huber_k);
@@ -751,6 +752,9 @@ void CheckSmoother(const robot_agent::SmootherOptions& s, Checker* c) {
            s.max_keyframe_gap_steps, "must be in 1..10000");
   c->Check(s.relinearize_threshold >= 0.0 && s.relinearize_threshold <= 100.0, "filter.smoother.relinearize_threshold",
            s.relinearize_threshold, "must be in [0, 100]");
+  c->Check(s.relinearize_delay_steps >= 0 && s.relinearize_delay_steps < s.window_keyframes,
+           "filter.smoother.relinearize_delay_steps", s.relinearize_delay_steps,
+           "must be in [0, filter.smoother.window_keyframes)");
   c->Check(s.front_end_particles >= 1 && s.front_end_particles <= 100000, "filter.smoother.front_end_particles",
            s.front_end_particles, "must be in 1..100000");
   c->Check(s.max_iterations >= 1 && s.max_iterations <= 1000, "filter.smoother.max_iterations", s.max_iterations,

@@ -36,6 +36,10 @@ struct SmootherOptions {
   // was linearized (metres, radians; the correction's components as they are), the whole run is
   // solved again and the prior rebuilt at that solution (0: never).
   double relinearize_threshold = 0.0;
+  // 0: a relinearization is done as soon as it is due. Otherwise it is solved on a thread of its
+  // own while the steps go on, and applied at the first keyframe this many steps after it fell
+  // due (the same step whatever its duration, so runs stay repeatable); below window_keyframes.
+  int relinearize_delay_steps = 0;
   double huber_k = 3.0;                      // the Huber loss's width on a reading's whitened residual norm
   double reading_gate_probability = 0.9999;  // chi-square 2 dof gate of a reading at the solution
   // Prior standard deviations of the odometry correction: speed factor, turn-rate factor,

@@ -32,6 +32,7 @@ KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
       window_keyframes_(std::max(2, options.filter.smoother.window_keyframes)),
       max_iterations_(std::max(1, options.filter.smoother.max_iterations)),
       relinearize_threshold_(options.filter.smoother.relinearize_threshold),
+      relinearize_delay_steps_(options.filter.smoother.relinearize_delay_steps),
       huber_k_(options.filter.smoother.huber_k),
       gate_(common::ChiSquare2Quantile(options.filter.smoother.reading_gate_probability)),
       robot_var_(options.noise.robot_process_var),
@@ -68,6 +69,7 @@ void KeyframeGraph::AddMotion(const std::vector<Motion>& segments) {
 
 void KeyframeGraph::AddKeyframe(int step, const std::vector<Reading>& readings) {
   Settle();
+  ApplyRelinearization(step);
   Keyframe kf;
   kf.step = step;
   kf.pose = common::Compose(window_.back().pose, OdometryIncrement(pending_, correction_));
@@ -91,18 +93,77 @@ double KeyframeGraph::PriorDrift() const {
 }
 
 void KeyframeGraph::Relinearize() {
-  KeyframeGraph all = Whole();
-  all.SolveWithGate();
-  all.window_keyframes_ = window_keyframes_;
-  all.max_iterations_ = max_iterations_;
-  // (The solve has started every landmark and mover state.)
-  const int leaving = static_cast<int>(all.window_.size()) - window_keyframes_;
-  if (leaving > 0) all.MarginalizeOldest(leaving);
-  *this = std::move(all);
+  if (relinearize_delay_steps_ == 0 || !movers_.empty()) {
+    KeyframeGraph all = Whole();
+    all.SolveWithGate();
+    Adopt(std::move(all));
+    return;
+  }
+  std::vector<Keyframe> history = std::move(history_);
+  history_.clear();
+  auto at = std::make_shared<const KeyframeGraph>(*this);
+  history_ = std::move(history);
+  StartRelinearization(std::move(at), history_.size(), window_.back().step + relinearize_delay_steps_);
+}
+
+std::shared_ptr<KeyframeGraph> KeyframeGraph::WholeToSolve(const KeyframeGraph& at, std::size_t history) const {
+  KeyframeGraph start = at;
+  start.history_.assign(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history));
+  return std::make_shared<KeyframeGraph>(start.Whole());
+}
+
+void KeyframeGraph::StartRelinearization(std::shared_ptr<const KeyframeGraph> at, std::size_t history, int apply_at) {
+  Relinearization r;
+  r.history = history;
+  r.apply_at = apply_at;
+  std::shared_ptr<KeyframeGraph> whole = WholeToSolve(*at, history);
+  r.at = std::move(at);
+  r.solved = std::async(std::launch::async, [whole] {
+               whole->SolveWithGate();
+               return whole;
+             }).share();
+  relinearizing_ = std::move(r);
+}
+
+void KeyframeGraph::ApplyRelinearization(int step) {
+  if (!relinearizing_ || step < relinearizing_->apply_at) return;
+  const Relinearization r = std::move(*relinearizing_);
+  relinearizing_.reset();
+  relinearize_due_ = false;  // the next solve decides again
+  KeyframeGraph& solved = *r.solved.get();
+  if (!r.stale) Adopt(std::move(solved));
+}
+
+void KeyframeGraph::Adopt(KeyframeGraph solved) {
+  const Keyframe& held = solved.window_.back();
+  const Keyframe* here = FindKeyframe(held.step);
+  const Pose2 shift = here != nullptr ? common::Compose(held.pose, common::Inverse(here->pose)) : Pose2{};
+  for (const Keyframe& kf : window_) {
+    if (kf.step <= held.step) continue;
+    solved.window_.push_back(kf);
+    solved.window_.back().pose = common::Compose(shift, kf.pose);
+  }
+  for (const auto& [track, p] : landmarks_) solved.landmarks_.emplace(track, common::TransformPoint(shift, p));
+  for (const auto& [key, state] : movers_) solved.movers_.emplace(key, common::Compose(shift, state));
+  solved.pending_ = pending_;
+  solved.static_tracks_ = static_tracks_;
+  solved.mover_models_ = mover_models_;
+  solved.moving_tracks_ = moving_tracks_;
+  solved.pose_correction_cov_ = pose_correction_cov_;
+  solved.landmark_cov_ = landmark_cov_;
+  solved.mover_cov_ = mover_cov_;
+  solved.window_keyframes_ = window_keyframes_;
+  solved.max_iterations_ = max_iterations_;
+  solved.relinearize_due_ = false;
+  // (The solve has started every landmark and mover state it holds.)
+  const int leaving = static_cast<int>(solved.window_.size()) - window_keyframes_;
+  if (leaving > 0) solved.MarginalizeOldest(leaving);
+  *this = std::move(solved);
 }
 
 void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::uint32_t>& from_to) {
   Settle();
+  if (relinearizing_ && from_step <= relinearizing_->at->window_.back().step) relinearizing_->stale = true;
   for (auto& kf : window_) {
     if (kf.step < from_step) continue;
     for (auto& r : kf.readings) {
@@ -117,6 +178,7 @@ void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::ui
 
 void KeyframeGraph::CutAndMove(int from_step, const Pose2& correction) {
   Settle();
+  if (relinearizing_ && from_step <= relinearizing_->at->window_.back().step) relinearizing_->stale = true;
   bool cut = false;
   for (auto& kf : window_) {
     if (kf.step < from_step || kf.fixed) continue;
@@ -459,12 +521,43 @@ bool KeyframeGraph::UpdateInliers() {
 void KeyframeGraph::Io(common::Archive& ar) {
   ar(window_, history_, pending_, landmarks_, static_tracks_, mover_models_, moving_tracks_, movers_, chain_starts_,
      correction_, prior_, calibration_prior_, pose_correction_cov_, landmark_cov_, mover_cov_, relinearize_due_);
-  if (!ar.loading()) return;
+  if (!ar.loading()) {
+    IoRelinearization(ar);
+    return;
+  }
   if (window_.empty()) throw common::ArchiveError("archive: a keyframe graph without keyframes");
   information_ = nullptr;  // a factorization of the last solve: that solve's own
   information_vars_.clear();
   history_bytes_ = 0;
   for (const Keyframe& kf : history_) history_bytes_ += HeldBytes(kf);
+  IoRelinearization(ar);
+}
+
+// A relinearization under way: the graph it started from (without its history) and when it is
+// applied; on reading, it is started again from the same graph, so it gives the same result.
+void KeyframeGraph::IoRelinearization(common::Archive& ar) {
+  bool under_way = relinearizing_.has_value();
+  ar(under_way);
+  if (!under_way) {
+    relinearizing_.reset();
+    return;
+  }
+  std::uint64_t history = 0;
+  int apply_at = 0;
+  bool stale = false;
+  auto at = std::make_shared<KeyframeGraph>(ar.loading() ? *this : *relinearizing_->at);
+  at->relinearizing_.reset();
+  if (!ar.loading()) {
+    history = relinearizing_->history;
+    apply_at = relinearizing_->apply_at;
+    stale = relinearizing_->stale;
+  }
+  ar(history, apply_at, stale);
+  at->Io(ar);
+  if (!ar.loading()) return;
+  if (history > history_.size()) throw common::ArchiveError("archive: a relinearization beyond the history");
+  StartRelinearization(std::move(at), history, apply_at);
+  relinearizing_->stale = stale;
 }
 
 std::size_t KeyframeGraph::KeyframeBytes(int steps, int segments, int readings) {
@@ -507,7 +600,7 @@ void KeyframeGraph::Solve() {
 }
 
 void KeyframeGraph::Settle() {
-  if (!relinearize_due_) return;
+  if (!relinearize_due_ || relinearizing_) return;
   relinearize_due_ = false;
   Relinearize();
 }
@@ -713,6 +806,7 @@ KeyframeGraph KeyframeGraph::Whole() const {
   all.prior_ = calibration_prior_;
   all.window_keyframes_ = std::numeric_limits<int>::max();
   all.max_iterations_ = 100;
+  all.relinearizing_.reset();
   return all;
 }
 

@@ -3,8 +3,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <future>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -126,7 +128,8 @@ class KeyframeGraph {
   // more than relinearize_threshold from where it was linearized, a relinearization is due.
   void Solve();
   // Does a relinearization that is due (Relinearize): work whose result serves the next step
-  // only, so a driver may do it between steps; every change to the graph does it first.
+  // only, so a driver may do it between steps; every change to the graph does it first. With
+  // relinearize_delay_steps, starts it on a thread of its own instead (applied by AddKeyframe).
   void Settle();
 
   // The newest pose (the last keyframe's composed with the pending motion) and its marginal
@@ -171,6 +174,8 @@ class KeyframeGraph {
   int WindowSize() const { return static_cast<int>(window_.size()); }
   // Keyframes marginalized so far (held in the fixed history for SmoothAll).
   int HistorySize() const { return static_cast<int>(history_.size()); }
+  // Whether a relinearization is under way on its thread (relinearize_delay_steps).
+  bool Relinearizing() const { return relinearizing_.has_value(); }
 
   // The bytes of what the graph holds beyond the object itself (SlamFilter::EstimatorBytes: the
   // elements of its containers): the window's and the history's keyframes (KeyframeBytes each),
@@ -277,8 +282,19 @@ class KeyframeGraph {
   // The largest component of x - x0 over the prior's variables.
   double PriorDrift() const;
   // The whole run solved to convergence, then the window's prior rebuilt at that solution by
-  // marginalizing the history again (relinearize_threshold).
+  // marginalizing the history again (relinearize_threshold): at once, or started now on a thread
+  // and applied at the first keyframe relinearize_delay_steps on (Relinearization).
   void Relinearize();
+  // The whole run as it stands, to be solved.
+  std::shared_ptr<KeyframeGraph> WholeToSolve(const KeyframeGraph& at, std::size_t history) const;
+  // Takes the whole run solved when the relinearization fell due: the keyframes and landmarks
+  // added since are appended, moved by the rigid motion that takes the newest keyframe it holds
+  // from here to its solution, the rest of the state since kept, and the history marginalized
+  // again at that solution down to the window.
+  void Adopt(KeyframeGraph solved);
+  // At a keyframe of `step`: applies the relinearization under way once its step has come (waits
+  // for it if need be), or drops it when a keyframe it holds was relabelled or moved since.
+  void ApplyRelinearization(int step);
   // A copy with every keyframe in the window, none marginalized (the prior the calibration's
   // alone), solved to convergence by SolveWithGate.
   KeyframeGraph Whole() const;
@@ -293,7 +309,23 @@ class KeyframeGraph {
   int window_keyframes_;
   int max_iterations_;
   double relinearize_threshold_;
+  int relinearize_delay_steps_;
   bool relinearize_due_ = false;
+  // A relinearization under way (relinearize_delay_steps): the graph when it fell due without its
+  // history (of which it had the first `history`), the first keyframe step at which it is applied,
+  // whether a keyframe it holds has been relabelled or moved since, and the solve on its thread.
+  struct Relinearization {
+    std::shared_ptr<const KeyframeGraph> at;
+    std::size_t history = 0;
+    int apply_at = 0;
+    bool stale = false;
+    std::shared_future<std::shared_ptr<KeyframeGraph>> solved;
+  };
+  std::optional<Relinearization> relinearizing_;
+  // Starts the solve of the whole run as `at` and the first `history` keyframes of the history
+  // were, on a thread of its own.
+  void StartRelinearization(std::shared_ptr<const KeyframeGraph> at, std::size_t history, int apply_at);
+  void IoRelinearization(common::Archive& ar);
   double huber_k_, gate_;
   Eigen::Vector3d robot_var_, landmark_var_;
   Eigen::Vector2d z_w_;
