@@ -519,18 +519,19 @@ bool KeyframeGraph::UpdateInliers() {
 }
 
 void KeyframeGraph::Io(common::Archive& ar) {
+  IoState(ar);
+  IoRelinearization(ar);
+}
+
+void KeyframeGraph::IoState(common::Archive& ar) {
   ar(window_, history_, pending_, landmarks_, static_tracks_, mover_models_, moving_tracks_, movers_, chain_starts_,
      correction_, prior_, calibration_prior_, pose_correction_cov_, landmark_cov_, mover_cov_, relinearize_due_);
-  if (!ar.loading()) {
-    IoRelinearization(ar);
-    return;
-  }
+  if (!ar.loading()) return;
   if (window_.empty()) throw common::ArchiveError("archive: a keyframe graph without keyframes");
   information_ = nullptr;  // a factorization of the last solve: that solve's own
   information_vars_.clear();
   history_bytes_ = 0;
   for (const Keyframe& kf : history_) history_bytes_ += HeldBytes(kf);
-  IoRelinearization(ar);
 }
 
 // A relinearization under way: the graph it started from (without its history) and when it is
@@ -553,7 +554,7 @@ void KeyframeGraph::IoRelinearization(common::Archive& ar) {
     stale = relinearizing_->stale;
   }
   ar(history, apply_at, stale);
-  at->Io(ar);
+  at->IoState(ar);
   if (!ar.loading()) return;
   if (history > history_.size()) throw common::ArchiveError("archive: a relinearization beyond the history");
   StartRelinearization(std::move(at), history, apply_at);

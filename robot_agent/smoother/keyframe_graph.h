@@ -325,6 +325,8 @@ class KeyframeGraph {
   // Starts the solve of the whole run as `at` and the first `history` keyframes of the history
   // were, on a thread of its own.
   void StartRelinearization(std::shared_ptr<const KeyframeGraph> at, std::size_t history, int apply_at);
+  // The graph's state (Io without the relinearization under way), and that relinearization.
+  void IoState(common::Archive& ar);
   void IoRelinearization(common::Archive& ar);
   double huber_k_, gate_;
   Eigen::Vector3d robot_var_, landmark_var_;

@@ -110,6 +110,15 @@ TEST(KeyframeGraph, EqualsTheBatchSolutionWhereNothingWasMarginalized) {
   EXPECT_LT((graph.PoseCovariance() - batch.PoseCovariance(0)).norm(), 0.02 * batch.PoseCovariance(0).norm());
 }
 
+// A window of 10 keyframes relinearized once anything has moved 1 cm, the calibration known roughly.
+AgentOptions RelinearizedWindow(const common::ScenarioOptions& o) {
+  AgentOptions options = common::AgentOptionsFor(o, "r1");
+  RoughCalibration(&options);
+  options.filter.smoother.window_keyframes = 10;
+  options.filter.smoother.relinearize_threshold = 0.01;
+  return options;
+}
+
 // The largest distance over the run between the newest pose of a graph that marginalizes all but
 // 10 keyframes (relinearized at every solve when `relinearize`) and that of a graph that keeps
 // every keyframe, both converged at every keyframe, with a roughly known calibration.
@@ -162,10 +171,7 @@ TEST(KeyframeGraph, ARelinearizationAppliedLaterStillRelinearizes) {
 // started again from the same graph and applied at the same step, whatever its duration.
 TEST(KeyframeGraph, ARelinearizationUnderWayComesBackFromAnArchive) {
   const common::ScenarioOptions o = StaticWorld(60, 11);
-  AgentOptions options = common::AgentOptionsFor(o, "r1");
-  RoughCalibration(&options);
-  options.filter.smoother.window_keyframes = 10;
-  options.filter.smoother.relinearize_threshold = 0.01;
+  AgentOptions options = RelinearizedWindow(o);
   options.filter.smoother.relinearize_delay_steps = 4;
   KeyframeGraph uninterrupted(options, options.initial_pose);
   std::optional<KeyframeGraph> restored;
@@ -207,10 +213,7 @@ TEST(KeyframeGraph, ARelinearizationUnderWayComesBackFromAnArchive) {
 // estimates, to the last bit.
 TEST(KeyframeGraph, ARelinearizationSettledBetweenStepsOrLaterGivesTheSameEstimates) {
   const common::ScenarioOptions o = StaticWorld(60, 11);
-  AgentOptions options = common::AgentOptionsFor(o, "r1");
-  RoughCalibration(&options);
-  options.filter.smoother.window_keyframes = 10;
-  options.filter.smoother.relinearize_threshold = 0.01;
+  AgentOptions options = RelinearizedWindow(o);
   KeyframeGraph settled(options, options.initial_pose), later(options, options.initial_pose);
   settled.SetTracks(AllTracks(), {});
   later.SetTracks(AllTracks(), {});
