@@ -32,7 +32,8 @@ KeyframeGraph::KeyframeGraph(const AgentOptions& options, const Pose2& start)
       window_keyframes_(std::max(2, options.filter.smoother.window_keyframes)),
       max_iterations_(std::max(1, options.filter.smoother.max_iterations)),
       relinearize_threshold_(options.filter.smoother.relinearize_threshold),
-      relinearize_delay_steps_(options.filter.smoother.relinearize_delay_steps),
+      // (The newest keyframe a relinearization holds must still be in the window when it is applied.)
+      relinearize_delay_steps_(std::clamp(options.filter.smoother.relinearize_delay_steps, 0, window_keyframes_ - 1)),
       huber_k_(options.filter.smoother.huber_k),
       gate_(common::ChiSquare2Quantile(options.filter.smoother.reading_gate_probability)),
       robot_var_(options.noise.robot_process_var),
@@ -130,14 +131,16 @@ void KeyframeGraph::ApplyRelinearization(int step) {
   const Relinearization r = std::move(*relinearizing_);
   relinearizing_.reset();
   relinearize_due_ = false;  // the next solve decides again
+  // (Taken from the shared result: a copy of this graph made meanwhile does not apply it again.)
   KeyframeGraph& solved = *r.solved.get();
-  if (!r.stale) Adopt(std::move(solved));
+  if (!r.stale && !solved.window_.empty() && FindKeyframe(solved.window_.back().step) != nullptr)
+    Adopt(std::move(solved));
 }
 
 void KeyframeGraph::Adopt(KeyframeGraph solved) {
   const Keyframe& held = solved.window_.back();
-  const Keyframe* here = FindKeyframe(held.step);
-  const Pose2 shift = here != nullptr ? common::Compose(held.pose, common::Inverse(here->pose)) : Pose2{};
+  const Keyframe* here = FindKeyframe(held.step);  // in the window: the delay is below its length
+  const Pose2 shift = common::Compose(held.pose, common::Inverse(here->pose));
   for (const Keyframe& kf : window_) {
     if (kf.step <= held.step) continue;
     solved.window_.push_back(kf);
@@ -145,6 +148,8 @@ void KeyframeGraph::Adopt(KeyframeGraph solved) {
   }
   for (const auto& [track, p] : landmarks_) solved.landmarks_.emplace(track, common::TransformPoint(shift, p));
   for (const auto& [key, state] : movers_) solved.movers_.emplace(key, common::Compose(shift, state));
+  for (const auto& [key, heading] : chain_starts_)
+    solved.chain_starts_.emplace(key, WrapAngle(heading + shift.heading));
   solved.pending_ = pending_;
   solved.static_tracks_ = static_tracks_;
   solved.mover_models_ = mover_models_;
@@ -329,6 +334,7 @@ void KeyframeGraph::StartMovers() {
 double KeyframeGraph::TrialCost(std::uint32_t track, double v_mps, double w_radps) const {
   KeyframeGraph trial = *this;
   trial.history_.clear();  // not needed to solve the window
+  trial.relinearizing_.reset();
   auto& model = trial.mover_models_.at(track);
   model.v_mps = v_mps;
   model.w_radps = w_radps;
