@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <iterator>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -108,9 +109,10 @@ void KeyframeGraph::Relinearize() {
 }
 
 std::shared_ptr<KeyframeGraph> KeyframeGraph::WholeToSolve(const KeyframeGraph& at, std::size_t history) const {
-  KeyframeGraph start = at;
-  start.history_.assign(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history));
-  return std::make_shared<KeyframeGraph>(start.Whole());
+  auto whole = std::make_shared<KeyframeGraph>(at);
+  whole->history_.assign(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history));
+  whole->MakeWhole();
+  return whole;
 }
 
 void KeyframeGraph::StartRelinearization(std::shared_ptr<const KeyframeGraph> at, std::size_t history, int apply_at) {
@@ -135,6 +137,10 @@ void KeyframeGraph::ApplyRelinearization(int step) {
   KeyframeGraph& solved = *r.solved.get();
   if (!r.stale && !solved.window_.empty() && FindKeyframe(solved.window_.back().step) != nullptr)
     Adopt(std::move(solved));
+}
+
+void KeyframeGraph::MarkRelinearizationStale(int from_step) {
+  if (relinearizing_ && from_step <= relinearizing_->at->window_.back().step) relinearizing_->stale = true;
 }
 
 void KeyframeGraph::Adopt(KeyframeGraph solved) {
@@ -168,7 +174,7 @@ void KeyframeGraph::Adopt(KeyframeGraph solved) {
 
 void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::uint32_t>& from_to) {
   Settle();
-  if (relinearizing_ && from_step <= relinearizing_->at->window_.back().step) relinearizing_->stale = true;
+  MarkRelinearizationStale(from_step);
   for (auto& kf : window_) {
     if (kf.step < from_step) continue;
     for (auto& r : kf.readings) {
@@ -183,7 +189,7 @@ void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::ui
 
 void KeyframeGraph::CutAndMove(int from_step, const Pose2& correction) {
   Settle();
-  if (relinearizing_ && from_step <= relinearizing_->at->window_.back().step) relinearizing_->stale = true;
+  MarkRelinearizationStale(from_step);
   bool cut = false;
   for (auto& kf : window_) {
     if (kf.step < from_step || kf.fixed) continue;
@@ -806,15 +812,19 @@ std::vector<std::pair<int, Pose2>> KeyframeGraph::Path() const {
 
 KeyframeGraph KeyframeGraph::Whole() const {
   KeyframeGraph all(*this);
-  all.window_.insert(all.window_.begin(), history_.begin(), history_.end());
-  all.history_.clear();
-  all.history_bytes_ = 0;
-  for (auto& kf : all.window_) kf.has_odometry = !kf.fixed && !kf.odometry_cut;
-  all.prior_ = calibration_prior_;
-  all.window_keyframes_ = std::numeric_limits<int>::max();
-  all.max_iterations_ = 100;
-  all.relinearizing_.reset();
+  all.MakeWhole();
   return all;
+}
+
+void KeyframeGraph::MakeWhole() {
+  window_.insert(window_.begin(), std::make_move_iterator(history_.begin()), std::make_move_iterator(history_.end()));
+  history_.clear();
+  history_bytes_ = 0;
+  for (auto& kf : window_) kf.has_odometry = !kf.fixed && !kf.odometry_cut;
+  prior_ = calibration_prior_;
+  window_keyframes_ = std::numeric_limits<int>::max();
+  max_iterations_ = 100;
+  relinearizing_.reset();
 }
 
 std::vector<std::pair<int, Pose2>> KeyframeGraph::SmoothAll() const {

@@ -295,9 +295,14 @@ class KeyframeGraph {
   // At a keyframe of `step`: applies the relinearization under way once its step has come (waits
   // for it if need be), or drops it when a keyframe it holds was relabelled or moved since.
   void ApplyRelinearization(int step);
+  // A keyframe from `from_step` on relabelled or moved: the relinearization under way is stale if
+  // it holds that keyframe.
+  void MarkRelinearizationStale(int from_step);
   // A copy with every keyframe in the window, none marginalized (the prior the calibration's
   // alone), solved to convergence by SolveWithGate.
   KeyframeGraph Whole() const;
+  // Makes this graph that copy: the history moved into the window.
+  void MakeWhole();
   std::vector<Var> CovarianceTargets(const std::vector<Var>& vars) const;
   // The information matrix (with the ridge) at the solution, factorized.
   std::shared_ptr<const Factorization> Information(const std::vector<Var>& vars, const Layout& layout) const;
