@@ -36,6 +36,7 @@
 #include "scripts/launch/run_viewer.h"
 #include "scripts/launch/shm_leftovers.h"
 #include "scripts/launch/simulation_run.h"
+#include "scripts/launch/wakeup_latency.h"
 
 namespace mrslam::launch {
 namespace {
@@ -71,7 +72,9 @@ struct LaunchFlags {
   bool allow_rejected = false;
   std::optional<int> view_port;  // --view: serve a live view of each run on this port
   bool secure = false;
-  int restarts = 0;  // --restart: how many times a dead agent is started again
+  int restarts = 0;               // --restart: how many times a dead agent is started again
+  bool low_latency = false;       // --low-latency: CPUs kept from sleeping while the runs last
+  bool low_latency_held = false;  // whether the kernel took that request
 };
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
@@ -247,8 +250,8 @@ struct RestartRecord {
   std::map<std::string, std::vector<double>> comeback_s;  // by robot id
 };
 
-int FinishSummary(const std::string& dir, const RunCost& cost, int domain, const RestartRecord& restarted,
-                  json* summary_out) {
+int FinishSummary(const std::string& dir, const RunCost& cost, int domain, bool low_latency,
+                  const RestartRecord& restarted, json* summary_out) {
   const std::string summary_path = dir + "/summary.json";
   std::ifstream in(summary_path);
   if (!in) {
@@ -269,6 +272,7 @@ int FinishSummary(const std::string& dir, const RunCost& cost, int domain, const
   summary["cpu_seconds"] = cost.cpu_s;
   summary["cpu_cores_mean"] = cost.wall_s > 0.0 ? cost.cpu_s / cost.wall_s : 0.0;
   summary["dds_domain"] = domain;
+  summary["low_latency"] = low_latency;
   json& peak = summary["peak_rss_mib"] = json::object();
   for (const auto& [name, kib] : cost.peak_rss_kib) peak[name] = static_cast<double>(kib) / 1024.0;
   if (summary.contains("robots") && summary["robots"].is_object()) {
@@ -317,6 +321,18 @@ class SnapshotFolder {
   }
   std::string path_;
 };
+
+// With --low-latency: the request to the kernel, held until the launcher ends (nullptr without the
+// flag). One that the kernel refuses gives a warning and the runs go on without it.
+std::unique_ptr<WakeupLatencyRequest> RequestLowLatency(LaunchFlags* flags) {
+  if (!flags->low_latency) return nullptr;
+  auto request = std::make_unique<WakeupLatencyRequest>(0);
+  flags->low_latency_held = request->held();
+  if (!request->held()) {
+    std::cerr << kName << ": warning: --low-latency: " << request->error() << "; running without it\n";
+  }
+  return request;
+}
 
 // Runs one seed into dir. Returns kOk (and the summary), kFailed or kStopped.
 int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, const std::string& scenario_path,
@@ -411,7 +427,7 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     return monitor_joined && !first_step_at ? kFailedBeforeStep1 : kFailed;
   }
   const RunCost cost{Seconds(Clock::now() - start), common::ProcessTreeCpuSeconds() - cpu_start, end.peak_rss_kib};
-  return FinishSummary(dir, cost, domain, {end.restarts, comebacks.seconds()}, summary_out);
+  return FinishSummary(dir, cost, domain, flags.low_latency_held, {end.restarts, comebacks.seconds()}, summary_out);
 }
 
 // What a finished seed prints: one line in a multi-seed run, else the summary table, the outputs
@@ -490,6 +506,7 @@ int Main(LaunchFlags flags) {
   const std::string out_dir = fs::absolute(flags.out_dir).lexically_normal().string();
   fs::create_directories(out_dir);
   const auto& stop = common::InstallStopHandler();
+  const std::unique_ptr<WakeupLatencyRequest> wakeup = RequestLowLatency(&flags);
   const std::optional<LaunchFlags> run_flags = SecureFlags(flags, scenario, out_dir, stop);
   if (!run_flags) return kStopped;
 
@@ -575,6 +592,10 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
          "times per agent; it restores its latest snapshot (every run.snapshot_every_steps steps) and rejoins the "
          "run (docs/faults.md). 0: a dead agent fails the run")
       ->check(CLI::Range(0, 1000));
+  app.add_flag("--low-latency", flags->low_latency,
+               "Ask the kernel to keep the CPUs from sleeping while the runs last (/dev/cpu_dma_latency, root only): "
+               "a DDS sample then wakes its reader within microseconds; idle CPUs poll instead of halting. Without "
+               "permission, a warning and the runs go on without it");
   app.add_flag("--secure", flags->secure,
                "DDS-Security on: make identities for the run's processes into OUT/security and pass --security to "
                "every process (docs/security.md)");

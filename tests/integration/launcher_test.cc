@@ -161,6 +161,7 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
   // Every process of the run used CPU; at most all cores of the machine on average.
   ExpectFiniteAtLeast(summary, "cpu_seconds", 1e-3, "run");
   ExpectFiniteAtLeast(summary, "cpu_cores_mean", 1e-3, "run");
+  EXPECT_EQ(summary.value("low_latency", true), false);  // no request to keep the CPUs awake without the flag
   EXPECT_LE(summary["cpu_cores_mean"].get<double>(), static_cast<double>(std::thread::hardware_concurrency()) + 0.5);
   // Every process's peak memory: more than a megabyte, less than the machine's.
   ASSERT_TRUE(summary.contains("peak_rss_mib")) << summary.dump(2);
@@ -417,12 +418,20 @@ TEST(LauncherTest, SeedsRunInTurnAndAggregate) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-launch-seeds");
   const std::string& out = temp_dir.path();
-  ChildProcess launcher(LaunchArgs(out, kSeedsDomain, {"--set", "run.steps=6", "--seeds", "3..4", "--no-plots"}),
-                        out + ".log");
+  ChildProcess launcher(
+      LaunchArgs(out, kSeedsDomain, {"--set", "run.steps=6", "--seeds", "3..4", "--no-plots", "--low-latency"}),
+      out + ".log");
   ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(out + ".log");
+  // The request to keep the CPUs awake is held where the kernel's file may be written, and
+  // where it may not the runs go on with a warning.
+  const bool may_request = access("/dev/cpu_dma_latency", W_OK) == 0;
   for (const int seed : {3, 4}) {
     const auto s = nlohmann::json::parse(ReadFile(out + "/seed-" + std::to_string(seed) + "/summary.json"));
     EXPECT_EQ(s.value("seed", -1), seed);
+    EXPECT_EQ(s.value("low_latency", !may_request), may_request);
+  }
+  if (!may_request) {
+    EXPECT_THAT(ReadFile(out + ".log"), HasSubstr("--low-latency: cannot open /dev/cpu_dma_latency"));
   }
   nlohmann::json aggregate;
   ASSERT_NO_THROW(aggregate = nlohmann::json::parse(ReadFile(out + "/aggregate.json")));
