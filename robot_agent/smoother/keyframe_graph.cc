@@ -103,8 +103,10 @@ void KeyframeGraph::Relinearize() {
   }
   std::vector<Keyframe> history = std::move(history_);
   history_.clear();
+  const std::size_t history_bytes = std::exchange(history_bytes_, 0);
   auto at = std::make_shared<const KeyframeGraph>(*this);
   history_ = std::move(history);
+  history_bytes_ = history_bytes;
   StartRelinearization(std::move(at), history_.size(), window_.back().step + relinearize_delay_steps_);
 }
 
@@ -120,6 +122,7 @@ void KeyframeGraph::StartRelinearization(std::shared_ptr<const KeyframeGraph> at
   r.history = history;
   r.apply_at = apply_at;
   std::shared_ptr<KeyframeGraph> whole = WholeToSolve(*at, history);
+  r.bytes = at->EstimatorBytes() + whole->EstimatorBytes();
   r.at = std::move(at);
   r.solved = std::async(std::launch::async, [whole] {
                whole->SolveWithGate();
@@ -160,9 +163,7 @@ void KeyframeGraph::Adopt(KeyframeGraph solved) {
   solved.static_tracks_ = static_tracks_;
   solved.mover_models_ = mover_models_;
   solved.moving_tracks_ = moving_tracks_;
-  solved.pose_correction_cov_ = pose_correction_cov_;
-  solved.landmark_cov_ = landmark_cov_;
-  solved.mover_cov_ = mover_cov_;
+  TurnCovariances(shift, &solved);
   solved.window_keyframes_ = window_keyframes_;
   solved.max_iterations_ = max_iterations_;
   solved.relinearize_due_ = false;
@@ -170,6 +171,20 @@ void KeyframeGraph::Adopt(KeyframeGraph solved) {
   const int leaving = static_cast<int>(solved.window_.size()) - window_keyframes_;
   if (leaving > 0) solved.MarginalizeOldest(leaving);
   *this = std::move(solved);
+}
+
+void KeyframeGraph::TurnCovariances(const Pose2& shift, KeyframeGraph* solved) const {
+  // (The rotation part of composing with the shift.)
+  Eigen::Matrix<double, 6, 6> turn = Eigen::Matrix<double, 6, 6>::Identity();
+  turn.topLeftCorner<3, 3>() = common::ComposeJacobianRight(shift, {});
+  const Eigen::Matrix3d pose_turn = turn.topLeftCorner<3, 3>();
+  const Eigen::Matrix2d point_turn = turn.topLeftCorner<2, 2>();
+  solved->pose_correction_cov_ = turn * pose_correction_cov_ * turn.transpose();
+  solved->landmark_cov_.clear();
+  for (const auto& [track, cov] : landmark_cov_)
+    solved->landmark_cov_.emplace(track, point_turn * cov * point_turn.transpose());
+  solved->mover_cov_.clear();
+  for (const auto& [key, cov] : mover_cov_) solved->mover_cov_.emplace(key, pose_turn * cov * pose_turn.transpose());
 }
 
 void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::uint32_t>& from_to) {
@@ -602,6 +617,7 @@ std::size_t KeyframeGraph::EstimatorBytes() const {
                       filters::ElementBytes(chain_starts_) + prior_bytes(prior_) + prior_bytes(calibration_prior_) +
                       filters::ElementBytes(landmark_cov_) + filters::ElementBytes(mover_cov_);
   for (const Keyframe& kf : window_) bytes += HeldBytes(kf);
+  if (relinearizing_) bytes += relinearizing_->bytes;
   return bytes + history_bytes_;
 }
 

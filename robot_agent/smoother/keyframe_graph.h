@@ -182,7 +182,7 @@ class KeyframeGraph {
   // the pending motion, the landmarks, the tracks, the movers' states and models, the priors
   // (variables, linearization points, H_p, g_p) and the covariances last computed. Grows by one
   // keyframe's bytes per marginalized keyframe; the rest follows the window, the map and the
-  // movers, bounded while they are.
+  // movers, bounded while they are; while a relinearization runs, the two copies it holds too.
   std::size_t EstimatorBytes() const;
   // What one keyframe holds, its pose, odometry (per step a vector of segments), readings and
   // preintegrated odometry: sizeof(Keyframe) + steps sizeof(std::vector<Motion>) + segments
@@ -292,6 +292,9 @@ class KeyframeGraph {
   // from here to its solution, the rest of the state since kept, and the history marginalized
   // again at that solution down to the window.
   void Adopt(KeyframeGraph solved);
+  // Gives `solved` this graph's covariances (the newest pose's with the correction's, each
+  // landmark's and mover's) turned by the rotation of `shift`, as the states they belong to.
+  void TurnCovariances(const common::Pose2& shift, KeyframeGraph* solved) const;
   // At a keyframe of `step`: applies the relinearization under way once its step has come (waits
   // for it if need be), or drops it when a keyframe it holds was relabelled or moved since.
   void ApplyRelinearization(int step);
@@ -318,12 +321,14 @@ class KeyframeGraph {
   bool relinearize_due_ = false;
   // A relinearization under way (relinearize_delay_steps): the graph when it fell due without its
   // history (of which it had the first `history`), the first keyframe step at which it is applied,
-  // whether a keyframe it holds has been relabelled or moved since, and the solve on its thread.
+  // whether a keyframe it holds has been relabelled or moved since, the solve on its thread, and
+  // the bytes the two copies hold (that graph, and the whole run being solved) while it runs.
   struct Relinearization {
     std::shared_ptr<const KeyframeGraph> at;
     std::size_t history = 0;
     int apply_at = 0;
     bool stale = false;
+    std::size_t bytes = 0;
     std::shared_future<std::shared_ptr<KeyframeGraph>> solved;
   };
   std::optional<Relinearization> relinearizing_;

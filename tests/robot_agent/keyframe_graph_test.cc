@@ -166,6 +166,38 @@ TEST(KeyframeGraph, ARelinearizationAppliedLaterStillRelinearizes) {
   EXPECT_LT(LargestGapToTheWholeRun(true, 3), 0.5 * LargestGapToTheWholeRun(false));
 }
 
+// While a relinearization runs, the two copies it holds (the graph without its history, and the
+// whole run being solved) count in the estimator's bytes: together they hold at least what the
+// graph held the step before; once applied they are gone.
+TEST(KeyframeGraph, ARelinearizationUnderWayCountsItsCopies) {
+  const common::ScenarioOptions o = StaticWorld(60, 11);
+  AgentOptions options = RelinearizedWindow(o);
+  options.filter.smoother.relinearize_delay_steps = 4;
+  KeyframeGraph graph(options, options.initial_pose);
+  graph.SetTracks(AllTracks(), {});
+  Feeder feeder(o);
+  std::size_t before = 0;
+  int started = 0, applied = 0;
+  for (int k = 0; k < o.run.steps && applied == 0; ++k) {
+    const bool was_running = graph.Relinearizing();
+    feeder.Next(&graph);
+    graph.Solve();
+    graph.Settle();
+    const std::size_t bytes = graph.EstimatorBytes();
+    if (!was_running && graph.Relinearizing()) {
+      EXPECT_GE(bytes, 2 * before) << k;
+      started = k;
+    }
+    if (was_running && !graph.Relinearizing()) {
+      EXPECT_LT(bytes, before) << k;
+      applied = k;
+    }
+    before = bytes;
+  }
+  EXPECT_GT(started, 0);
+  EXPECT_GT(applied, started);
+}
+
 // A graph written out while a relinearization is under way on its thread and read back goes on
 // with the same estimates as the graph never interrupted, to the last bit: the relinearization is
 // started again from the same graph and applied at the same step, whatever its duration.
@@ -195,6 +227,7 @@ TEST(KeyframeGraph, ARelinearizationUnderWayComesBackFromAnArchive) {
     if (restored) {
       EXPECT_EQ(restored->Pose().Vector(), uninterrupted.Pose().Vector()) << k;
       EXPECT_EQ(restored->PoseCovariance(), uninterrupted.PoseCovariance()) << k;
+      EXPECT_EQ(restored->EstimatorBytes(), uninterrupted.EstimatorBytes()) << k;
     } else if (uninterrupted.Relinearizing()) {
       common::Archive out = common::Archive::ForWriting();
       uninterrupted.Io(out);
