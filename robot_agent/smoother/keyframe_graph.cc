@@ -155,6 +155,7 @@ void KeyframeGraph::Adopt(KeyframeGraph solved) {
     solved.window_.push_back(kf);
     solved.window_.back().pose = common::Compose(shift, kf.pose);
   }
+  TurnCovariances(shift, &solved);  // before the states it moves join it
   for (const auto& [track, p] : landmarks_) solved.landmarks_.emplace(track, common::TransformPoint(shift, p));
   for (const auto& [key, state] : movers_) solved.movers_.emplace(key, common::Compose(shift, state));
   for (const auto& [key, heading] : chain_starts_)
@@ -163,7 +164,6 @@ void KeyframeGraph::Adopt(KeyframeGraph solved) {
   solved.static_tracks_ = static_tracks_;
   solved.mover_models_ = mover_models_;
   solved.moving_tracks_ = moving_tracks_;
-  TurnCovariances(shift, &solved);
   solved.window_keyframes_ = window_keyframes_;
   solved.max_iterations_ = max_iterations_;
   solved.relinearize_due_ = false;
@@ -174,17 +174,21 @@ void KeyframeGraph::Adopt(KeyframeGraph solved) {
 }
 
 void KeyframeGraph::TurnCovariances(const Pose2& shift, KeyframeGraph* solved) const {
-  // (The rotation part of composing with the shift.)
-  Eigen::Matrix<double, 6, 6> turn = Eigen::Matrix<double, 6, 6>::Identity();
-  turn.topLeftCorner<3, 3>() = common::ComposeJacobianRight(shift, {});
-  const Eigen::Matrix3d pose_turn = turn.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d turn = common::ComposeJacobianRight(shift, {});  // the shift's rotation
   const Eigen::Matrix2d point_turn = turn.topLeftCorner<2, 2>();
-  solved->pose_correction_cov_ = turn * pose_correction_cov_ * turn.transpose();
+  solved->pose_correction_cov_ = pose_correction_cov_;
+  solved->pose_correction_cov_.topRows<3>() = turn * solved->pose_correction_cov_.topRows<3>();
+  solved->pose_correction_cov_.leftCols<3>() = solved->pose_correction_cov_.leftCols<3>() * turn.transpose();
   solved->landmark_cov_.clear();
-  for (const auto& [track, cov] : landmark_cov_)
-    solved->landmark_cov_.emplace(track, point_turn * cov * point_turn.transpose());
+  for (const auto& [track, cov] : landmark_cov_) {
+    const bool moved = solved->landmarks_.count(track) == 0;
+    solved->landmark_cov_.emplace(track, moved ? Eigen::Matrix2d(point_turn * cov * point_turn.transpose()) : cov);
+  }
   solved->mover_cov_.clear();
-  for (const auto& [key, cov] : mover_cov_) solved->mover_cov_.emplace(key, pose_turn * cov * pose_turn.transpose());
+  for (const auto& [key, cov] : mover_cov_) {
+    const bool moved = solved->movers_.count(key) == 0;
+    solved->mover_cov_.emplace(key, moved ? Eigen::Matrix3d(turn * cov * turn.transpose()) : cov);
+  }
 }
 
 void KeyframeGraph::Relabel(int from_step, const std::map<std::uint32_t, std::uint32_t>& from_to) {

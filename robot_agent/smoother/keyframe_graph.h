@@ -292,8 +292,9 @@ class KeyframeGraph {
   // from here to its solution, the rest of the state since kept, and the history marginalized
   // again at that solution down to the window.
   void Adopt(KeyframeGraph solved);
-  // Gives `solved` this graph's covariances (the newest pose's with the correction's, each
-  // landmark's and mover's) turned by the rotation of `shift`, as the states they belong to.
+  // Gives `solved` this graph's covariances, those of the states Adopt moves by `shift` turned
+  // by its rotation as they are: the newest pose's (with the correction's), and each landmark's
+  // and mover's that `solved` does not hold yet; the others as they were.
   void TurnCovariances(const common::Pose2& shift, KeyframeGraph* solved) const;
   // At a keyframe of `step`: applies the relinearization under way once its step has come (waits
   // for it if need be), or drops it when a keyframe it holds was relabelled or moved since.

@@ -594,7 +594,7 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
       ->check(CLI::Range(0, 1000));
   app.add_flag("--low-latency", flags->low_latency,
                "Ask the kernel to keep the CPUs from sleeping while the runs last (/dev/cpu_dma_latency, root only): "
-               "a DDS sample then wakes its reader within microseconds; idle CPUs poll instead of halting. Without "
+               "a DDS sample then wakes its reader sooner; idle CPUs poll instead of halting. Without "
                "permission, a warning and the runs go on without it");
   app.add_flag("--secure", flags->secure,
                "DDS-Security on: make identities for the run's processes into OUT/security and pass --security to "

@@ -4,8 +4,8 @@
 
 // A request to the kernel that the CPUs wake from idle within a bound (Linux PM QoS,
 // /dev/cpu_dma_latency): while it is held, the idle loop polls instead of halting the CPU, so a
-// process woken by a DDS sample runs within microseconds instead of after the CPU (or, in a
-// virtual machine, the host) has woken it. The cost is that idle CPUs stay busy polling for as
+// process woken by a DDS sample runs sooner, without waiting for the CPU (or, in a virtual
+// machine, the host) to wake it from a halt. The cost is that idle CPUs stay busy polling for as
 // long as the request is held. The request lasts while the file stays open.
 namespace mrslam::launch {
 

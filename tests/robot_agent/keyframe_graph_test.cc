@@ -198,6 +198,37 @@ TEST(KeyframeGraph, ARelinearizationUnderWayCountsItsCopies) {
   EXPECT_GT(applied, started);
 }
 
+// The keyframes added while a relinearization ran are moved rigidly onto its solution when it is
+// applied, and the newest pose's covariance turns with them: right after, it is the one before
+// turned by the motion's rotation.
+TEST(KeyframeGraph, ARelinearizationAppliedTurnsTheNewestPosesCovariance) {
+  const common::ScenarioOptions o = StaticWorld(60, 11);
+  AgentOptions options = RelinearizedWindow(o);
+  options.filter.smoother.relinearize_delay_steps = 4;
+  KeyframeGraph graph(options, options.initial_pose);
+  graph.SetTracks(AllTracks(), {});
+  Feeder feeder(o);
+  int applied = 0;
+  for (int k = 0; k < o.run.steps && applied == 0; ++k) {
+    const bool was_running = graph.Relinearizing();
+    const Eigen::Matrix3d before = graph.PoseCovariance();  // no motion pending: the newest keyframe's
+    const std::vector<Pose2> poses_before = graph.KeyframePoses();
+    feeder.Next(&graph);
+    if (was_running && !graph.Relinearizing()) {
+      const std::size_t newest = poses_before.size() - 1;
+      const Pose2 shift = common::Compose(graph.KeyframePoses().at(newest), common::Inverse(poses_before[newest]));
+      const Eigen::Matrix3d turn = common::ComposeJacobianRight(shift, {});
+      const Eigen::Matrix3d turned = turn * before * turn.transpose();
+      EXPECT_GT((turned - before).norm(), 1e-3 * before.norm()) << "a turn too small to tell";
+      EXPECT_LT((graph.PoseCovariance() - turned).norm(), 1e-9 * before.norm());
+      applied = k;
+    }
+    graph.Solve();
+    graph.Settle();
+  }
+  EXPECT_GT(applied, 0);
+}
+
 // A graph written out while a relinearization is under way on its thread and read back goes on
 // with the same estimates as the graph never interrupted, to the last bit: the relinearization is
 // started again from the same graph and applied at the same step, whatever its duration.

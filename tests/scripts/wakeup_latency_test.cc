@@ -1,5 +1,5 @@
 // WakeupLatencyRequest against a file of its own in place of /dev/cpu_dma_latency: it writes the
-// bound as the kernel reads it and holds the file; a file it cannot open gives one line naming it.
+// bound as the kernel reads it; a file it cannot open or write to gives one line naming it.
 #include "scripts/launch/wakeup_latency.h"
 
 #include <unistd.h>
@@ -16,7 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-TEST(WakeupLatencyRequest, WritesTheBoundAsA32BitIntegerAndHoldsTheFile) {
+TEST(WakeupLatencyRequest, WritesTheBoundAsA32BitInteger) {
   const fs::path device = fs::temp_directory_path() / ("mrslam-wakeup-" + std::to_string(getpid()));
   std::ofstream(device).close();
   {
@@ -39,6 +39,13 @@ TEST(WakeupLatencyRequest, AFileItCannotOpenIsNamedInOneLine) {
   EXPECT_FALSE(request.held());
   EXPECT_NE(request.error().find(device), std::string::npos);
   EXPECT_EQ(request.error().find('\n'), std::string::npos);
+}
+
+TEST(WakeupLatencyRequest, AFileThatRefusesTheWriteIsNotHeld) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+  const WakeupLatencyRequest request(0, "/dev/full");  // opens, and every write fails (no space)
+  EXPECT_FALSE(request.held());
+  EXPECT_NE(request.error().find("cannot write to /dev/full"), std::string::npos) << request.error();
 }
 
 }  // namespace
