@@ -119,6 +119,22 @@ AgentOptions RelinearizedWindow(const common::ScenarioOptions& o) {
   return options;
 }
 
+// RelinearizedWindow with each relinearization applied delay_steps after it falls due.
+AgentOptions DelayedWindow(const common::ScenarioOptions& o, int delay_steps) {
+  AgentOptions options = RelinearizedWindow(o);
+  options.filter.smoother.relinearize_delay_steps = delay_steps;
+  return options;
+}
+
+// A graph of DelayedWindow(4) over a static world, and what feeds it step by step.
+struct DelayedGraph {
+  common::ScenarioOptions o = StaticWorld(60, 11);
+  AgentOptions options = DelayedWindow(o, 4);
+  KeyframeGraph graph{options, options.initial_pose};
+  Feeder feeder{o};
+  DelayedGraph() { graph.SetTracks(AllTracks(), {}); }
+};
+
 // The largest distance over the run between the newest pose of a graph that marginalizes all but
 // 10 keyframes (relinearized at every solve when `relinearize`) and that of a graph that keeps
 // every keyframe, both converged at every keyframe, with a roughly known calibration.
@@ -170,17 +186,13 @@ TEST(KeyframeGraph, ARelinearizationAppliedLaterStillRelinearizes) {
 // whole run being solved) count in the estimator's bytes: together they hold at least what the
 // graph held the step before; once applied they are gone.
 TEST(KeyframeGraph, ARelinearizationUnderWayCountsItsCopies) {
-  const common::ScenarioOptions o = StaticWorld(60, 11);
-  AgentOptions options = RelinearizedWindow(o);
-  options.filter.smoother.relinearize_delay_steps = 4;
-  KeyframeGraph graph(options, options.initial_pose);
-  graph.SetTracks(AllTracks(), {});
-  Feeder feeder(o);
+  DelayedGraph g;
+  KeyframeGraph& graph = g.graph;
   std::size_t before = 0;
   int started = 0, applied = 0;
-  for (int k = 0; k < o.run.steps && applied == 0; ++k) {
+  for (int k = 0; k < g.o.run.steps && applied == 0; ++k) {
     const bool was_running = graph.Relinearizing();
-    feeder.Next(&graph);
+    g.feeder.Next(&graph);
     graph.Solve();
     graph.Settle();
     const std::size_t bytes = graph.EstimatorBytes();
@@ -202,18 +214,14 @@ TEST(KeyframeGraph, ARelinearizationUnderWayCountsItsCopies) {
 // applied, and the newest pose's covariance turns with them: right after, it is the one before
 // turned by the motion's rotation.
 TEST(KeyframeGraph, ARelinearizationAppliedTurnsTheNewestPosesCovariance) {
-  const common::ScenarioOptions o = StaticWorld(60, 11);
-  AgentOptions options = RelinearizedWindow(o);
-  options.filter.smoother.relinearize_delay_steps = 4;
-  KeyframeGraph graph(options, options.initial_pose);
-  graph.SetTracks(AllTracks(), {});
-  Feeder feeder(o);
+  DelayedGraph g;
+  KeyframeGraph& graph = g.graph;
   int applied = 0;
-  for (int k = 0; k < o.run.steps && applied == 0; ++k) {
+  for (int k = 0; k < g.o.run.steps && applied == 0; ++k) {
     const bool was_running = graph.Relinearizing();
     const Eigen::Matrix3d before = graph.PoseCovariance();  // no motion pending: the newest keyframe's
     const std::vector<Pose2> poses_before = graph.KeyframePoses();
-    feeder.Next(&graph);
+    g.feeder.Next(&graph);
     if (was_running && !graph.Relinearizing()) {
       const std::size_t newest = poses_before.size() - 1;
       const Pose2 shift = common::Compose(graph.KeyframePoses().at(newest), common::Inverse(poses_before[newest]));
@@ -234,8 +242,7 @@ TEST(KeyframeGraph, ARelinearizationAppliedTurnsTheNewestPosesCovariance) {
 // started again from the same graph and applied at the same step, whatever its duration.
 TEST(KeyframeGraph, ARelinearizationUnderWayComesBackFromAnArchive) {
   const common::ScenarioOptions o = StaticWorld(60, 11);
-  AgentOptions options = RelinearizedWindow(o);
-  options.filter.smoother.relinearize_delay_steps = 4;
+  const AgentOptions options = DelayedWindow(o, 4);
   KeyframeGraph uninterrupted(options, options.initial_pose);
   std::optional<KeyframeGraph> restored;
   uninterrupted.SetTracks(AllTracks(), {});
