@@ -10,7 +10,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <stdexcept>
@@ -21,6 +20,7 @@
 #include "common/app.h"
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
+#include "world_sim/evaluator/metrics.h"
 
 namespace mrslam {
 namespace {
@@ -33,12 +33,6 @@ struct Flags {
   int samples = 100;
   int domain = 119;
 };
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
 
 // An estimate of the size an agent of swarm_8 writes: 40 landmarks, 8 frames known.
 msg::Estimate Sample() {
@@ -98,7 +92,8 @@ int Measure(const Flags& flags) {
       hops.push_back(echo.step_cpu_ms());
       backs.push_back(HopUs(times));
     }
-    std::printf("%10d %16.0f %16.0f %16.0f\n", gap, Median(hops), Median(backs), Median(trips));
+    std::printf("%10d %16.0f %16.0f %16.0f\n", gap, evaluator::Median(hops), evaluator::Median(backs),
+                evaluator::Median(trips));
   }
   return 0;
 }
