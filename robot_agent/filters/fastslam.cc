@@ -172,7 +172,7 @@ FastSlam<D>::FastSlam(const AgentOptions& options, std::uint64_t seed)
 
   const Pose2 start = options.initial_pose;
   const int n = std::max(1, filter_.particles);
-  particles_.assign(n, Particle{start, 0.0, 0, {}});
+  particles_.assign(n, Particle{start, 0.0, 0, 0, {}});
   log_weights_.assign(n, -std::log(static_cast<double>(n)));
   pose_ = start;
   pose_covariance_.setZero();
@@ -265,7 +265,10 @@ void FastSlam<D>::Process(const common::SensorStep& step) {
     ProposeParticle(p, segments, var, dt, detections, &batch_);
   }
   batch_.Run();
-  for (int p = 0; p < NumParticles(); ++p) CountMisses(p);
+  for (int p = 0; p < NumParticles(); ++p) {
+    CountMisses(p);
+    if constexpr (D == 5) GatherStationary(&particles_[p]);
+  }
 
   const std::vector<double> weights = NormalizeLogWeights(&log_weights_);
   last_ess_ = EffectiveSampleSize(weights);
@@ -483,7 +486,7 @@ void FastSlam<D>::PredictLandmarks(Particle* particle, double dt) {
     (void)particle;
     (void)dt;
   } else {
-    for (int b = 0; b < static_cast<int>(particle->blocks.size()); ++b) {
+    for (int b = particle->still / kLanes; b < static_cast<int>(particle->blocks.size()); ++b) {
       Block* block = MutableBlock(particle, b);
       const int lanes = std::min(kLanes, particle->count - b * kLanes);
       PredictBlock(block, lanes, dt, q_);
@@ -722,7 +725,30 @@ void FastSlam<D>::CountMisses(int p) {
 }
 
 template <int D>
+void FastSlam<D>::GatherStationary(Particle* particle) {
+  int front = particle->still, back = particle->count - 1;
+  const auto stationary = [&](int s) { return particle->blocks[s / kLanes]->meta[s % kLanes].stationary; };
+  while (true) {
+    while (front <= back && stationary(front)) ++front;
+    while (back > front && !stationary(back)) --back;
+    if (front >= back) break;
+    SwapSlots(particle, front++, back--);
+  }
+  particle->still = front;
+}
+
+template <int D>
+void FastSlam<D>::SwapSlots(Particle* particle, int a, int b) {
+  Block held;
+  particle->blocks[a / kLanes]->CopyLane(a % kLanes, &held, 0);
+  const Block& from = *particle->blocks[b / kLanes];
+  from.CopyLane(b % kLanes, MutableBlock(particle, a / kLanes), a % kLanes);
+  held.CopyLane(0, MutableBlock(particle, b / kLanes), b % kLanes);
+}
+
+template <int D>
 void FastSlam<D>::RemoveLandmark(Particle* particle, int slot) {
+  particle->still = std::min(particle->still, slot);
   const int last = particle->count - 1;
   if (slot != last) {
     const Block& from = *particle->blocks[last / kLanes];
@@ -781,6 +807,28 @@ FilterEstimate FastSlam<D>::Estimate() const {
 }
 
 template <int D>
+template <typename Fn>
+void FastSlam<D>::ForEachBlock(Fn&& fn) const {
+  // The block after block b of particle p, or the first block of a later particle.
+  const auto ahead = [&](int p, int b) -> const Block* {
+    for (; p < NumParticles(); ++p, b = 0) {
+      if (b * kLanes < particles_[p].count) return particles_[p].blocks[b].get();
+    }
+    return nullptr;
+  };
+  const Block* next = ahead(0, 0);
+  for (int p = 0; p < NumParticles(); ++p) {
+    const Particle& particle = particles_[p];
+    for (int b = 0; b * kLanes < particle.count; ++b) {
+      const Block* block = next;
+      next = ahead(p, b + 1);
+      if (next != nullptr) PrefetchBlock(next);
+      fn(p, b * kLanes, *block, std::min(kLanes, particle.count - b * kLanes));
+    }
+  }
+}
+
+template <int D>
 std::vector<MapLandmark> FastSlam<D>::MapEstimate() const {
   std::vector<double> w(NumParticles());
   double sw = 0.0;
@@ -792,14 +840,9 @@ std::vector<MapLandmark> FastSlam<D>::MapEstimate() const {
   // summed in the order of the particles and their slots.
   TrackTable table;
   auto for_each_landmark = [&](auto&& fn) {
-    for (int p = 0; p < NumParticles(); ++p) {
-      const Particle& particle = particles_[p];
-      for (int s = 0; s < particle.count; ++s) {
-        const Block& b = *particle.blocks[s / kLanes];
-        const int l = s % kLanes;
-        fn(w[p], b, l, table.tracks()[table.Find(s, b.meta[l].track_id)]);
-      }
-    }
+    ForEachBlock([&](int p, int first_slot, const Block& b, int lanes) {
+      for (int l = 0; l < lanes; ++l) fn(w[p], b, l, table.tracks()[table.Find(first_slot + l, b.meta[l].track_id)]);
+    });
   };
   auto has_heading = [](const Block& b, int l) { return D > 2 && !b.meta[l].position_only; };
   for_each_landmark([&](double wp, const Block& b, int l, TrackAccumulator& a) {

@@ -57,7 +57,9 @@ namespace mrslam::robot_agent::filters {
 //     both sightings. With constant turn rate each particle first samples whether the landmark
 //     stands still (SampleStationary: filter.landmark_static_prior and the displacement's
 //     likelihood); a static one is the two sightings fused, v = w = 0 exactly, and no process
-//     noise. New landmarks start from the inverse sensor model.
+//     noise: prediction skips it (each particle keeps its static landmarks in its front slots,
+//     whose blocks then stay shared between the copies resampling makes). New landmarks start
+//     from the inverse sensor model.
 //  6. Landmarks expected in the field of view but not seen drop_after_misses times in a row
 //     are removed; a landmark is tentative until seen confirm_sightings times. A landmark whose
 //     predicted position standard deviation sqrt(P_xx + P_yy) exceeds max_landmark_position_sd_m
@@ -132,6 +134,10 @@ class FastSlam : public SlamFilter {
     common::Pose2 pose;
     double speed_mps = 0.0;  // IMU motion source: this particle's forward speed
     int count = 0;           // landmarks, in slots 0..count-1
+    // Constant turn rate: slots 0..still-1 hold landmarks taken as static, gathered there after
+    // each step's miss counting. Prediction leaves them alone, so their blocks stay shared
+    // between particles; static landmarks added since (from a peer) may lie further on.
+    int still = 0;
     std::vector<std::shared_ptr<Block>> blocks;
   };
   struct Detection {
@@ -197,9 +203,16 @@ class FastSlam : public SlamFilter {
   // The map of the estimate: every track held by more than half of the weight, computed from
   // the particles and weights (Estimate keeps it in map_estimate_ until they change).
   std::vector<MapLandmark> MapEstimate() const;
+  // Calls fn(p, first_slot, block, lanes) for every block of every particle in order (lanes: the
+  // block's slots in use), each block's rows requested from memory one block ahead.
+  template <typename Fn>
+  void ForEachBlock(Fn&& fn) const;
 
   Block* MutableBlock(Particle* particle, int b);
   void PredictLandmarks(Particle* particle, double dt);
+  // Constant turn rate: moves the landmarks taken as static to the front slots (Particle::still).
+  void GatherStationary(Particle* particle);
+  void SwapSlots(Particle* particle, int a, int b);
   void CreateLandmark(Particle* particle, const common::Pose2& pose, const Detection& det);
   void StartFullState(Block* block, int lane, const common::Pose2& pose, const Detection& det);
   // Known candidates: samples a landmark's model by the likelihood of its displacement's length

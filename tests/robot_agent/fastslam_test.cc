@@ -398,6 +398,27 @@ TEST(FastSlam, ResamplingSharesLandmarkStorage) {
   }
 }
 
+// Constant turn rate: prediction leaves the landmarks taken as static alone, so their blocks
+// stay shared between the copies resampling made. A robot drives past 24 static landmarks,
+// resampling every step; once they are all behind it, out of view, the particles' first blocks
+// (static landmarks only) descend from few ancestors: under a quarter of them are distinct
+// (every one was distinct when prediction wrote every landmark each step).
+TEST(FastSlam, PredictionLeavesTheBlocksOfStaticLandmarksShared) {
+  common::ScenarioOptions o = OneRobotScenario(1.0, 0.0, 100);
+  o.robots[0].initial_pose = {0.0, 0.0, 0.0};
+  o.sensors.lidar.max_range_m = 6.0;
+  for (int i = 0; i < 24; ++i) AddLandmark(&o, i + 1, {1.0 * i, i % 2 ? 2.0 : -2.0, 0.0});
+  o.filter.landmark_kinematics = robot_agent::LandmarkKinematics::kConstantTurnRate;
+  o.filter.resample_every_step = true;
+  TinyWorld world(o, 4);
+  FastSlam<5> filter(common::AgentOptionsFor(o, "r1"), 4);
+  for (int k = 0; k < 70; ++k) filter.Process(world.Step());
+  ASSERT_GE(filter.Estimate().landmarks.size(), 20u);
+  std::set<const void*> first_blocks;
+  for (int p = 0; p < filter.NumParticles(); ++p) first_blocks.insert(filter.LandmarkStorage(p).at(0));
+  EXPECT_LT(4 * first_blocks.size(), static_cast<std::size_t>(filter.NumParticles()));
+}
+
 // What FastSLAM holds grows with its map, not with time: in a static world whose map is complete
 // by step 200, EstimatorBytes at step 2000 is within 10% of that at step 200. It counts each
 // distinct landmark block once (shared copies as the archive writes them).
