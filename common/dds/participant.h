@@ -89,9 +89,11 @@ class Participant {
   // The topic `name` of type PubSubType, created once per name; the type is constructed and
   // registered once per participant: a generated type support computes its largest serialized
   // size when constructed, a loop over every bound of its nested sequences (about 10 ms for a
-  // factor batch, once per peer's reader it was half of a 32-robot run's start).
+  // factor batch, once per peer's reader it was half of a 32-robot run's start). Threads may
+  // make writers and readers at once.
   template <typename PubSubType>
   eprosima::fastdds::dds::Topic* GetTopic(const std::string& name) {
+    const std::lock_guard<std::mutex> lock(topics_mutex_);
     auto type = type_names_.find(typeid(PubSubType));
     if (type == type_names_.end()) {
       type =
@@ -114,6 +116,7 @@ class Participant {
   std::string RegisterType(const eprosima::fastdds::dds::TypeSupport& type);
   eprosima::fastdds::dds::Topic* GetTopic(const std::string& name, const std::string& type_name);
 
+  std::mutex topics_mutex_;  // guards topics_ and type_names_
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::map<std::type_index, std::string> type_names_;
   int history_steps_ = 0;

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <iterator>
 #include <map>
+#include <optional>
 #include <set>
 #include <tuple>
 
@@ -23,6 +25,7 @@
 #include "robot_agent/cooperation/sample_validation.h"
 #include "robot_agent/node/msg_conversion.h"
 #include "robot_agent/node/peer_endpoints.h"
+#include "robot_agent/node/peer_writer_pool.h"
 
 namespace mrslam::robot_agent {
 
@@ -43,9 +46,11 @@ struct AgentNode::Impl {
   dds::Writer<msg::StepAckPubSubType> ack_writer;
   dds::Writer<msg::FinalTrajectoryPubSubType> final_writer;
   std::map<std::uint32_t, double> step_times;  // every step's time, for the final trajectory
-  // Readers of every peer's topics into this agent and, lazily, writers into the peers'.
+  // Readers of every peer's topics into this agent and, when first needed, writers into the peers'
+  // (in realtime opened in the background: the messages to a peer wait in `held` until they are).
   std::map<std::string, std::unique_ptr<PeerReaders>> from_peers;
-  std::map<std::string, std::unique_ptr<PeerWriters>> peers;
+  PeerWriterPool peers;
+  std::map<std::string, PeerMessages> held;
   cooperation::Cooperation cooperation;
   cooperation::JointTracker joint_tracker;
   // Peer messages received, by the sender's step: applied at the start of the next step.
@@ -79,6 +84,7 @@ struct AgentNode::Impl {
                         o.lockstep ? dds::Acknowledgment::kPrompt : dds::Acknowledgment::kPerSecond),
         ack_writer(participant, dds::AckTopic(a.robot_id)),
         final_writer(participant, dds::FinalTrajectoryTopic(a.robot_id), dds::History::kWhole),
+        peers(participant, a.robot_id, a.cooperation.share_factors, !o.lockstep),
         cooperation(a),
         joint_tracker(a),
         sensors(o.horizon_steps) {
@@ -297,28 +303,56 @@ struct AgentNode::Impl {
     return out;
   }
 
-  // Writes a step's peer messages; returns the number of messages per recipient.
-  std::map<std::string, std::uint32_t> Send(const PeerMessages& messages) {
+  // Writes a step's peer messages; returns the number of messages per recipient. A message to a
+  // peer whose writers are not open yet waits in `held`, after those held before it, and goes
+  // out at a later step once they are.
+  std::map<std::string, std::uint32_t> Send(PeerMessages messages) {
     std::map<std::string, std::uint32_t> counts;
-    auto to = [&](const auto& message) -> PeerWriters& {
+    PeerMessages out;
+    for (auto& [peer, waiting] : held) Append(std::move(waiting), &out);
+    held.clear();
+    Append(std::move(messages), &out);
+    // Writes message on the writers' member `writer`, or holds it in the peer's member `waiting`.
+    auto send = [&](auto PeerWriters::*writer, auto& message, auto PeerMessages::*waiting) {
       const std::string& peer = message.recipient_id();
       ++counts[peer];
-      auto& w = peers[peer];
-      if (!w) w = std::make_unique<PeerWriters>(participant, agent.robot_id, peer, agent.cooperation.share_factors);
-      return *w;
+      PeerWriters* w = held.count(peer) > 0 ? nullptr : peers.Get(peer);
+      if (w == nullptr) {
+        (held[peer].*waiting).push_back(std::move(message));
+        return false;
+      }
+      if (!Deref(w->*writer).Write(message)) throw AgentError("DDS refused a peer message to " + peer);
+      return true;
     };
-    auto write = [&](auto& writer, const auto& message) {
-      if (!writer.Write(message)) throw AgentError("DDS refused a peer message to " + message.recipient_id());
-    };
-    for (const auto& m : messages.relative) write(to(m).relative, m);
-    for (const auto& m : messages.maps) {
-      write(to(m).map, m);
-      spdlog::info("sent a map snapshot of {} landmarks and a history of {} steps to {}", m.landmarks().size(),
-                   m.history().size(), m.recipient_id());
+    for (auto& m : out.relative) send(&PeerWriters::relative, m, &PeerMessages::relative);
+    for (auto& m : out.maps) {
+      const std::size_t landmarks = m.landmarks().size(), history = m.history().size();
+      const std::string peer = m.recipient_id();
+      if (send(&PeerWriters::map, m, &PeerMessages::maps)) {
+        spdlog::info("sent a map snapshot of {} landmarks and a history of {} steps to {}", landmarks, history, peer);
+      }
     }
-    for (const auto& m : messages.moved) write(to(m).moved, m);
-    for (const auto& m : messages.factors) write(*to(m).factors, m);
+    for (auto& m : out.moved) send(&PeerWriters::moved, m, &PeerMessages::moved);
+    for (auto& m : out.factors) send(&PeerWriters::factors, m, &PeerMessages::factors);
     return counts;
+  }
+
+  static void Append(PeerMessages from, PeerMessages* to) {
+    auto move = [](auto* a, auto* b) {
+      b->insert(b->end(), std::make_move_iterator(a->begin()), std::make_move_iterator(a->end()));
+    };
+    move(&from.relative, &to->relative);
+    move(&from.maps, &to->maps);
+    move(&from.moved, &to->moved);
+    move(&from.factors, &to->factors);
+  }
+  template <typename W>
+  static W& Deref(W& w) {
+    return w;
+  }
+  template <typename W>
+  static W& Deref(std::optional<W>& w) {
+    return *w;
   }
 
   void Acknowledge(std::uint32_t step, double time_s, const std::map<std::string, std::uint32_t>& sent = {}) {
@@ -430,7 +464,11 @@ struct AgentNode::Impl {
     estimate_writer.WaitForAcknowledgments(left());
     final_writer.WaitForAcknowledgments(left());
     ack_writer.WaitForAcknowledgments(left());
-    for (auto& [peer, w] : peers) {
+    if (!held.empty()) {
+      peers.WaitAllOpen(deadline);
+      Send({});
+    }
+    for (auto& [peer, w] : peers.Open()) {
       w->relative.WaitForAcknowledgments(left());
       w->map.WaitForAcknowledgments(left());
       w->moved.WaitForAcknowledgments(left());
@@ -570,7 +608,7 @@ struct AgentNode::Impl {
     filters::FilterEstimate published = joint_tracker.Corrected(estimate);
     cooperation.CompleteMap(&published);
     const double step_cpu_ms = 1e3 * (common::ThreadCpuSeconds() - cpu_start_s);
-    const PeerMessages to_peers = Prepare(std::move(outbox));
+    PeerMessages to_peers = Prepare(std::move(outbox));
     LogRendezvous(k, *last);
     msg::Estimate m = ToMsg(published, agent.robot_id, agent.filter.type);
     for (const auto& e : cooperation.rendezvous()) m.rendezvous().push_back(ToMsg(e));
@@ -586,9 +624,9 @@ struct AgentNode::Impl {
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));
     if (!estimate_writer.Write(m)) throw AgentError("DDS refused to publish the estimate of step " + std::to_string(k));
     // The peers' messages after the estimate: they do not delay it (a first message to a peer
-    // creates the writers toward it). Only lockstep waits for the acknowledgement (realtime's
+    // has the writers toward it opened). Only lockstep waits for the acknowledgement (realtime's
     // clock waits for nobody and announces no peer message).
-    const auto sent = Send(to_peers);
+    const auto sent = Send(std::move(to_peers));
     if (options.lockstep) Acknowledge(k, time_s, sent);
     ++counters.steps_processed;
     ++next_step;
