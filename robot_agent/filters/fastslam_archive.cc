@@ -50,8 +50,7 @@ void FastSlam<D>::IoParticles(common::Archive& ar) {
     if (p.count < 0 || p.count > static_cast<int>(p.blocks.size()) * kLanes) {
       throw common::ArchiveError("archive: a particle holds more landmarks than its blocks");
     }
-    // The static landmarks lead, as the filter left them between steps.
-    while (p.still < p.count && p.blocks[p.still / kLanes]->meta[p.still % kLanes].stationary) ++p.still;
+    if constexpr (D == 5) GatherStationary(&p);  // finds where the static landmarks end
   }
   if (ar.loading() && log_weights_.size() != particles_.size()) {
     throw common::ArchiveError("archive: particles and weights differ in number");
