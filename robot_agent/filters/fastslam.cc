@@ -21,7 +21,9 @@ using common::kPi;
 using common::Pose2;
 using common::WrapAngle;
 
-// Variance of an angle about which nothing is known (uniform on a circle): pi^2 / 3.
+// How far a particle's proposal may move (FastSLAM 2.0: with each matched reading) before the
+// landmarks its readings can gate are gathered again: a step's corrections are centimetres.
+constexpr double kReachShiftM = 0.25;
 
 // Largest landmark speed the filter may meet: the fastest known candidate, else the bound.
 double MaxLandmarkSpeed(const FilterOptions& f) {
@@ -156,7 +158,8 @@ FastSlam<D>::FastSlam(const AgentOptions& options, std::uint64_t seed)
       batch_(var_r_, var_b_),
       rng_(seed, options.robot_id + "/fastslam"),
       last_ess_(options.filter.particles),
-      calibration_(options.filter) {
+      calibration_(options.filter),
+      reachable_(ReachRule{std::max(gates_.match, gates_.create), var_r_, var_b_, gates_.euclidean, kReachShiftM}) {
   // Landmark process noise per step: none for static landmarks; (x, y, heading) from the
   // scenario, and for constant turn rate the speed and turn-rate random walks.
   for (int i = 0; i < D; ++i) q_[i] = 0.0;
@@ -259,6 +262,7 @@ void FastSlam<D>::Process(const common::SensorStep& step) {
   });
   for (int i = 0; i < static_cast<int>(detections.size()); ++i) detections[i].index = i;
   creation_ids_.assign(detections.size(), 0);
+  if (!detections.empty()) reachable_.StartStep(detections.front().range_m, detections.back().range_m);
   detection_labels_.assign(detections.size() * particles_.size(), 0);
 
   for (int p = 0; p < NumParticles(); ++p) {
@@ -338,7 +342,7 @@ typename FastSlam<D>::PoseProposal FastSlam<D>::MotionPrior(const Particle& part
 template <int D>
 void FastSlam<D>::AssociateDetections(int p, const std::vector<Detection>& detections, PoseProposal* proposal) {
   const Particle& particle = particles_[p];
-  d2_.resize(particle.blocks.size() * kLanes);
+  reachable_.Reset();
   used_.assign(particle.count, 0);
   matches_.clear();
   gated_.clear();
@@ -369,13 +373,9 @@ std::pair<int, AssociationKind> FastSlam<D>::Associate(const Particle& particle,
             slot < 0 ? AssociationKind::kNew : (used_[slot] ? AssociationKind::kIgnored : AssociationKind::kMatched)};
   }
   if (count == 0) return {-1, AssociationKind::kNew};
-  const int num_blocks = static_cast<int>(particle.blocks.size());
-  for (int b = 0; b < num_blocks; ++b) {
-    GateBlock(*particle.blocks[b], std::min(kLanes, count - b * kLanes), proposal.mu, proposal.sigma, det.range_m,
-              det.bearing_rad, var_r_, var_b_, gates_.euclidean, &d2_[static_cast<std::size_t>(b) * kLanes]);
-  }
-  const int slot = NearestUnused(d2_.data(), count, used_);
-  return {slot, slot >= 0 ? gates_.Classify(d2_[slot]) : AssociationKind::kNew};
+  const auto [slot, d2] =
+      reachable_.Nearest(particle.blocks, count, proposal.mu, proposal.sigma, det.range_m, det.bearing_rad, used_);
+  return {slot, slot >= 0 ? gates_.Classify(d2) : AssociationKind::kNew};
 }
 
 template <int D>

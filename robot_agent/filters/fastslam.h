@@ -15,6 +15,7 @@
 #include "robot_agent/filters/landmark_ekf.h"
 #include "robot_agent/filters/map_fusion.h"
 #include "robot_agent/filters/odometry_calibration.h"
+#include "robot_agent/filters/reachable_landmarks.h"
 #include "robot_agent/filters/slam_filter.h"
 #include "robot_agent/options/agent_options.h"
 
@@ -41,7 +42,8 @@ namespace mrslam::robot_agent::filters {
 //     associated with the particle's landmarks on the predicted measurements: nearest unused
 //     landmark by squared Mahalanobis distance under S = H_m P H_m^T + H_x Sigma H_x^T + R;
 //     matched within the chi-square gate, new beyond the new-landmark gate, else ignored.
-//     Reported identities (landmark_id >= 0) are used directly.
+//     Only the landmarks a reading can gate are gated (ReachableLandmarks: a range bound of the
+//     distance, exact for the outcome). Reported identities (landmark_id >= 0) are used directly.
 //  4. Proposal. FastSLAM 2.0 (default): each match updates the pose Gaussian like an EKF,
 //        K = Sigma H_x^T S^-1, mu += K nu, Sigma = (I - K H_x) Sigma,
 //     and the pose is sampled from N(mu, Sigma) after the last match. FastSLAM 1.0 samples the
@@ -288,7 +290,7 @@ class FastSlam : public SlamFilter {
   mutable MapCache map_estimate_;
 
   // Scratch.
-  std::vector<double> d2_;
+  ReachableLandmarks<D> reachable_;  // the particle's landmarks the step's readings can gate
   std::vector<std::uint8_t> used_;
   std::vector<Match> matches_;
   std::vector<Match> gated_;  // identified detections beyond the outlier gate: labelled, unused
