@@ -65,6 +65,13 @@ std::pair<int, double> ReachableLandmarks<D>::Nearest(const std::vector<std::sha
                                                       int count, const common::Pose2& pose,
                                                       const Eigen::Matrix3d& sigma, double z_r, double z_b,
                                                       const std::vector<std::uint8_t>& used) {
+  if (count <= kLanes) {  // one block: gated as it is, nothing to gain by gathering
+    d2_.resize(kLanes);
+    GateBlock(*blocks[0], count, pose, sigma, z_r, z_b, rule_.var_r, rule_.var_b, rule_.euclidean, d2_.data());
+    const int slot = NearestUnused(d2_.data(), count, used);
+    if (slot < 0) return {-1, std::numeric_limits<double>::infinity()};
+    return {slot, d2_[slot]};
+  }
   const Eigen::Vector2d xy(pose.x, pose.y);
   const double pose_var_xy = sigma(0, 0) + sigma(1, 1);
   if (!valid_ || (xy - center_).norm() > rule_.shift_m || pose_var_xy > pose_var_xy_) {

@@ -55,7 +55,8 @@ class ReachableLandmarks {
   std::pair<int, double> Nearest(const std::vector<std::shared_ptr<LandmarkBlock<D>>>& blocks, int count,
                                  const common::Pose2& pose, const Eigen::Matrix3d& sigma, double z_r, double z_b,
                                  const std::vector<std::uint8_t>& used);
-  // Landmarks gathered at the last gathering (for tests and counts).
+  // Landmarks gathered at the last gathering (for tests and counts; a particle of one block is
+  // gated without gathering).
   int size() const { return static_cast<int>(slots_.size()); }
 
  private:
