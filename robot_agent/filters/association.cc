@@ -23,16 +23,4 @@ AssociationKind AssociationGates::Classify(double d2) const {
   return AssociationKind::kIgnored;
 }
 
-int NearestUnused(const double* d2, int count, const std::vector<std::uint8_t>& used) {
-  int best = -1;
-  double best_d2 = 0.0;
-  for (int i = 0; i < count; ++i) {
-    if (used[i] == 0 && (best < 0 || d2[i] < best_d2)) {
-      best = i;
-      best_d2 = d2[i];
-    }
-  }
-  return best;
-}
-
 }  // namespace mrslam::robot_agent::filters

@@ -28,7 +28,23 @@ struct AssociationGates {
   AssociationKind Classify(double d2) const;
 };
 
-// Index of the smallest d2[i] over i < count with used[i] == 0, or -1 if there is none.
-int NearestUnused(const double* d2, int count, const std::vector<std::uint8_t>& used);
+// Index of the smallest d2[i] over i < count with is_used(i) false (the first of equals), or -1
+// if there is none.
+template <typename IsUsed>
+int NearestUnusedOf(const double* d2, int count, IsUsed&& is_used) {
+  int best = -1;
+  double best_d2 = 0.0;
+  for (int i = 0; i < count; ++i) {
+    if (!is_used(i) && (best < 0 || d2[i] < best_d2)) {
+      best = i;
+      best_d2 = d2[i];
+    }
+  }
+  return best;
+}
+// The same with used[i] != 0 for a used one.
+inline int NearestUnused(const double* d2, int count, const std::vector<std::uint8_t>& used) {
+  return NearestUnusedOf(d2, count, [&used](int i) { return used[i] != 0; });
+}
 
 }  // namespace mrslam::robot_agent::filters

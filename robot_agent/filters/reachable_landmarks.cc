@@ -65,13 +65,23 @@ std::pair<int, double> ReachableLandmarks<D>::Nearest(const std::vector<std::sha
                                                       int count, const common::Pose2& pose,
                                                       const Eigen::Matrix3d& sigma, double z_r, double z_b,
                                                       const std::vector<std::uint8_t>& used) {
+  int nearest = -1;       // among the d2_ computed
   if (count <= kLanes) {  // one block: gated as it is, nothing to gain by gathering
     d2_.resize(kLanes);
     GateBlock(*blocks[0], count, pose, sigma, z_r, z_b, rule_.var_r, rule_.var_b, rule_.euclidean, d2_.data());
-    const int slot = NearestUnused(d2_.data(), count, used);
-    if (slot < 0) return {-1, std::numeric_limits<double>::infinity()};
-    return {slot, d2_[slot]};
+    nearest = NearestUnused(d2_.data(), count, used);
+  } else {
+    GateGathered(blocks, count, pose, sigma, z_r, z_b);
+    nearest = NearestUnusedOf(d2_.data(), size(), [&](int i) { return used[slots_[i]] != 0; });
   }
+  if (nearest < 0) return {-1, std::numeric_limits<double>::infinity()};
+  return {count <= kLanes ? nearest : slots_[nearest], d2_[nearest]};
+}
+
+template <int D>
+void ReachableLandmarks<D>::GateGathered(const std::vector<std::shared_ptr<LandmarkBlock<D>>>& blocks, int count,
+                                         const common::Pose2& pose, const Eigen::Matrix3d& sigma, double z_r,
+                                         double z_b) {
   const Eigen::Vector2d xy(pose.x, pose.y);
   const double pose_var_xy = sigma(0, 0) + sigma(1, 1);
   if (!valid_ || (xy - center_).norm() > rule_.shift_m || pose_var_xy > pose_var_xy_) {
@@ -83,11 +93,6 @@ std::pair<int, double> ReachableLandmarks<D>::Nearest(const std::vector<std::sha
     GateBlock(blocks_[b], std::min(kLanes, n - b * kLanes), pose, sigma, z_r, z_b, rule_.var_r, rule_.var_b,
               rule_.euclidean, &d2_[static_cast<std::size_t>(b) * kLanes]);
   }
-  used_.resize(n);
-  for (int i = 0; i < n; ++i) used_[i] = used[slots_[i]];
-  const int i = NearestUnused(d2_.data(), n, used_);
-  if (i < 0) return {-1, std::numeric_limits<double>::infinity()};
-  return {slots_[i], d2_[i]};
 }
 
 #define MRSLAM_REACHABLE_LANDMARKS(D)                                                                            \

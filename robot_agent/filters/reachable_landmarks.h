@@ -34,9 +34,9 @@ std::uint32_t ReachableLanes(const LandmarkBlock<D>& block, int count, const Eig
 
 // One particle's landmarks that the step's readings can gate, their positions and position
 // covariances (all that gating reads) copied into blocks of their own in slot order (so that
-// ties are broken as over all of them), and gated from there: a step's
-// readings see only the landmarks within the lidar's range of the robot, and gating every
-// landmark of every particle for every reading was the step's largest cost on large maps.
+// ties are broken as over all of them), and gated from there: a step's readings see only the
+// landmarks within the lidar's range of the robot, and gating every landmark of every particle
+// for every reading was the step's largest cost on large maps.
 // Gathered again when the proposal moves by more than rule.shift_m or its position variance
 // grows (a FastSLAM 2.0 proposal moves and shrinks with each matched reading).
 template <int D>
@@ -62,6 +62,9 @@ class ReachableLandmarks {
  private:
   void Gather(const std::vector<std::shared_ptr<LandmarkBlock<D>>>& blocks, int count, const Eigen::Vector2d& xy,
               double pose_var_xy);
+  // d2_ of the gathered landmarks (gathered first when due) for the reading.
+  void GateGathered(const std::vector<std::shared_ptr<LandmarkBlock<D>>>& blocks, int count, const common::Pose2& pose,
+                    const Eigen::Matrix3d& sigma, double z_r, double z_b);
 
   ReachRule rule_;
   double z_min_ = 0.0, z_max_ = 0.0;
@@ -70,7 +73,6 @@ class ReachableLandmarks {
   double pose_var_xy_ = 0.0;
   std::vector<LandmarkBlock<2>> blocks_;
   std::vector<int> slots_;  // the particle's slot of each gathered landmark
-  std::vector<std::uint8_t> used_;
   std::vector<double> d2_;
 };
 
