@@ -47,6 +47,21 @@ TEST(DeliveryTimingTest, AnEstimateWrittenAfterTheNextStepsSensorDataIsLate) {
     timing.EstimateDelivered("r1", k, written, written + 100'000, 1.0);
   }
   EXPECT_EQ(timing.Summary("r1").late_estimates, 2);
+  EXPECT_EQ(timing.Summary("r1").late_steps, (std::vector<std::uint32_t>{3, 7}));
+}
+
+TEST(DeliveryTimingTest, NamesTheStepsOfTheFirstLateEstimatesOnly) {
+  const int n = static_cast<int>(kMaxLateSteps) + 10;
+  DeliveryTiming timing = Steps(n + 1);
+  for (int k = 1; k <= n; ++k) {  // every one written after the next step's odometry
+    const std::int64_t written = kStart + (k + 1) * kStepNs;
+    timing.EstimateDelivered("r1", k, written, written + 100'000, 1.0);
+  }
+  const DeliverySummary s = timing.Summary("r1");
+  EXPECT_EQ(s.late_estimates, n);
+  ASSERT_EQ(s.late_steps.size(), kMaxLateSteps);
+  EXPECT_EQ(s.late_steps.front(), 1U);
+  EXPECT_EQ(s.late_steps.back(), kMaxLateSteps);
 }
 
 TEST(DeliveryTimingTest, SensorDataTakenAfterItsOwnStepsEstimateStillJudgesTheOneBefore) {
@@ -61,6 +76,7 @@ TEST(DeliveryTimingTest, SensorDataTakenAfterItsOwnStepsEstimateStillJudgesTheOn
     timing.SensorWritten("r1", k, sensor);
   }
   EXPECT_EQ(timing.Summary("r1").late_estimates, 1);
+  EXPECT_EQ(timing.Summary("r1").late_steps, std::vector<std::uint32_t>{4});
   EXPECT_LE(timing.Held(), 1U);  // only step 10's estimate, awaiting step 11's odometry
 }
 

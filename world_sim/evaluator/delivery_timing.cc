@@ -85,7 +85,10 @@ void DeliveryTiming::JudgeLate(RobotTiming* robot, std::uint32_t step) {
   const auto estimate = robot->estimate_written.find(step);
   const auto next = robot->sensor_written.find(step + 1);
   if (estimate == robot->estimate_written.end() || next == robot->sensor_written.end()) return;
-  if (estimate->second > next->second) ++robot->late;
+  if (estimate->second > next->second) {
+    ++robot->late;
+    if (robot->late_steps.size() < kMaxLateSteps) robot->late_steps.push_back(step);
+  }
   robot->estimate_written.erase(estimate);
   robot->sensor_written.erase(next);
 }
@@ -108,6 +111,7 @@ DeliverySummary DeliveryTiming::Summary(const std::string& robot_id) const {
   const auto robot = robots_.find(robot_id);
   if (robot == robots_.end()) return out;
   out.late_estimates = robot->second.late;
+  out.late_steps = robot->second.late_steps;
   out.timed_steps = robot->second.latency_us.size();
   if (!robot->second.latency_us.empty()) {
     out.latency_us_median = Median(robot->second.latency_us);

@@ -9,13 +9,18 @@
 // How fast a run's estimates reached the evaluator, from DDS's timestamps (no DDS types here).
 namespace mrslam::evaluator {
 
+// How many late estimates' steps a robot's summary names (where they fall: the start, a meeting,
+// the map's growth).
+constexpr std::size_t kMaxLateSteps = 20;
+
 // One robot's delivery figures (docs/metrics.md).
 struct DeliverySummary {
   double latency_us_median = 0.0;
   double latency_us_p99 = 0.0;
   double estimate_hop_us_median = 0.0;  // received(estimate) - written(estimate)
   int late_estimates = 0;
-  std::size_t timed_steps = 0;  // the steps whose latency is known
+  std::vector<std::uint32_t> late_steps;  // the steps of the first kMaxLateSteps late estimates
+  std::size_t timed_steps = 0;            // the steps whose latency is known
 };
 
 // Takes when world_sim wrote each step and each robot's sensor data, and when each estimate was
@@ -56,6 +61,7 @@ class DeliveryTiming {
     std::vector<double> latency_us;
     std::vector<double> estimate_hop_us;
     int late = 0;
+    std::vector<std::uint32_t> late_steps;  // the first kMaxLateSteps
   };
   // Judges whether the estimate of step k was late, if both times are known; lets them go.
   static void JudgeLate(RobotTiming* robot, std::uint32_t step);

@@ -359,6 +359,7 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["latency_us_p99"] = delivery.latency_us_p99;
   r["estimate_hop_us_median"] = delivery.estimate_hop_us_median;
   r["late_estimates"] = delivery.late_estimates;
+  r["late_estimate_steps"] = delivery.late_steps;
   r["frames_known"] = robot.last ? robot.last->frames_known : std::vector<std::string>{};
   r["data_held"] = robot.last ? robot.last->data_held : std::map<std::string, std::uint32_t>{};
   r["rejected_samples"] = robot.last ? robot.last->rejected_samples : 0U;
