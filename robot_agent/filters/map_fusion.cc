@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -196,31 +199,91 @@ MatchCandidate CandidateOf(const MapLandmark& l) {
           OriginKey(l.origin_robot, l.origin_track), !l.moving};
 }
 
+namespace {
+
+// The own candidates by position, identity and provenance, so that an incoming landmark meets
+// only those it can pair with: a pair by position needs |d| < too_close_m or d2 <= gate_d2, and
+// d2 = d' S^-1 d >= |d|^2 / tr(S) where det S > 0 and tr S >= 0 (S is then positive definite;
+// d2 is computed only where det S > 0), so no own landmark farther than
+// max(too_close_m, sqrt(gate_d2 (tr(S_in) + max tr(S_own)))) in x can pair by position.
+class OwnIndex {
+ public:
+  explicit OwnIndex(const std::vector<MatchCandidate>& own) {
+    for (int j = 0; j < static_cast<int>(own.size()); ++j) {
+      const MatchCandidate& o = own[j];
+      if (o.landmark_id >= 0) by_id_.emplace(o.landmark_id, j);
+      if (o.origin >= 0) by_origin_.emplace(o.origin, j);
+      // A position that is not finite pairs with nothing by position (d is not a number).
+      if (!o.position.allFinite()) continue;
+      by_x_.emplace_back(o.position.x(), j);
+      // A covariance that is not finite or has a negative trace leaves the bound unproven.
+      const double trace = o.covariance.allFinite() ? o.covariance.trace() : -1.0;
+      max_trace_ = std::max(max_trace_, trace);
+      min_trace_ = std::min(min_trace_, trace);
+    }
+    std::sort(by_x_.begin(), by_x_.end());
+  }
+
+  // The own indices with this identity or provenance.
+  auto WithId(int id) const { return by_id_.equal_range(id); }
+  auto WithOrigin(std::int64_t origin) const { return by_origin_.equal_range(origin); }
+
+  // Calls fn(j) for every own j that may pair with `in` by position (a superset: at most the
+  // x-window that the bound above allows; every own landmark if the bound does not hold).
+  template <typename Fn>
+  void ForEachNear(const MatchCandidate& in, double gate_d2, double too_close_m, Fn&& fn) const {
+    if (!in.position.allFinite()) return;
+    constexpr double kSlack = 1.0 + 1e-6;  // the d2 computation's rounding
+    const double in_trace = in.covariance.allFinite() ? in.covariance.trace() : -1.0;
+    double reach = std::numeric_limits<double>::infinity();
+    if (in_trace >= 0.0 && min_trace_ >= 0.0) {
+      reach = std::max(too_close_m, std::sqrt(gate_d2 * (in_trace + max_trace_)) * kSlack);
+    }
+    const double x = in.position.x();
+    auto it =
+        std::isinf(reach) ? by_x_.begin() : std::lower_bound(by_x_.begin(), by_x_.end(), std::make_pair(x - reach, -1));
+    for (; it != by_x_.end() && it->first <= x + reach; ++it) fn(it->second);
+  }
+
+ private:
+  std::multimap<int, int> by_id_;
+  std::multimap<std::int64_t, int> by_origin_;
+  std::vector<std::pair<double, int>> by_x_;
+  double max_trace_ = 0.0;
+  double min_trace_ = 0.0;
+};
+
+}  // namespace
+
 std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const std::vector<MatchCandidate>& incoming,
                                 double gate_d2, double too_close_m) {
   // (distance, incoming, own); identity matches get distance -1 so that they come first.
   std::vector<std::tuple<double, int, int>> pairs;
   std::vector<char> near(incoming.size(), 0);  // static, within too_close_m of a static own one
+  const OwnIndex index(own);
   for (int i = 0; i < static_cast<int>(incoming.size()); ++i) {
     const MatchCandidate& in = incoming[i];
-    for (int j = 0; j < static_cast<int>(own.size()); ++j) {
+    // Both with identities: equal ones match, no other pairing. Else equal provenance matches.
+    if (in.landmark_id >= 0) {
+      for (auto [it, end] = index.WithId(in.landmark_id); it != end; ++it) pairs.emplace_back(-1.0, i, it->second);
+    }
+    if (in.origin >= 0) {
+      for (auto [it, end] = index.WithOrigin(in.origin); it != end; ++it) {
+        if (in.landmark_id < 0 || own[it->second].landmark_id < 0) pairs.emplace_back(-1.0, i, it->second);
+      }
+    }
+    index.ForEachNear(in, gate_d2, too_close_m, [&](int j) {
       const MatchCandidate& o = own[j];
-      if (in.landmark_id >= 0 && o.landmark_id >= 0) {
-        if (in.landmark_id == o.landmark_id) pairs.emplace_back(-1.0, i, j);
-        continue;
-      }
-      if (in.origin >= 0 && in.origin == o.origin) {
-        pairs.emplace_back(-1.0, i, j);
-        continue;
-      }
+      if (in.landmark_id >= 0 && o.landmark_id >= 0) return;
+      if (in.origin >= 0 && in.origin == o.origin) return;
       const Eigen::Vector2d d = in.position - o.position;
       if (in.stationary && o.stationary && d.norm() < too_close_m) near[i] = 1;
       const Eigen::Matrix2d s = in.covariance + o.covariance;
       const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
-      if (!(det > 0.0)) continue;
+      if (!(det > 0.0)) return;
       const double d2 = (s(1, 1) * d.x() * d.x() - 2.0 * s(0, 1) * d.x() * d.y() + s(0, 0) * d.y() * d.y()) / det;
       if (d2 <= gate_d2) pairs.emplace_back(d2, i, j);
-    }
+    });
   }
   std::sort(pairs.begin(), pairs.end());
   std::vector<int> match(incoming.size(), -1);

@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <tuple>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/QR>
 
 #include "common/gaussian.h"
@@ -333,6 +337,92 @@ TEST(MatchLandmarks, DifferentIdentitiesNeverMatch) {
   const Eigen::Matrix2d c = Eigen::Matrix2d::Identity() * 0.01;
   const std::vector<int> m = MatchLandmarks({{{0.0, 0.0}, c, 1}}, {{{0.0, 0.0}, c, 2}}, 100.0);
   EXPECT_EQ(m[0], -1);
+}
+
+// MatchLandmarks as every pair is tried: the plain form its index must equal.
+std::vector<int> MatchEveryPair(const std::vector<MatchCandidate>& own, const std::vector<MatchCandidate>& incoming,
+                                double gate_d2, double too_close_m) {
+  std::vector<std::tuple<double, int, int>> pairs;
+  std::vector<char> near(incoming.size(), 0);
+  for (int i = 0; i < static_cast<int>(incoming.size()); ++i) {
+    for (int j = 0; j < static_cast<int>(own.size()); ++j) {
+      const MatchCandidate &in = incoming[i], &o = own[j];
+      if (in.landmark_id >= 0 && o.landmark_id >= 0) {
+        if (in.landmark_id == o.landmark_id) pairs.emplace_back(-1.0, i, j);
+        continue;
+      }
+      if (in.origin >= 0 && in.origin == o.origin) {
+        pairs.emplace_back(-1.0, i, j);
+        continue;
+      }
+      const Eigen::Vector2d d = in.position - o.position;
+      if (in.stationary && o.stationary && d.norm() < too_close_m) near[i] = 1;
+      const Eigen::Matrix2d s = in.covariance + o.covariance;
+      const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
+      if (!(det > 0.0)) continue;
+      const double d2 = (s(1, 1) * d.x() * d.x() - 2.0 * s(0, 1) * d.x() * d.y() + s(0, 0) * d.y() * d.y()) / det;
+      if (d2 <= gate_d2) pairs.emplace_back(d2, i, j);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<int> match(incoming.size(), -1);
+  std::vector<char> used(own.size(), 0);
+  for (const auto& [d2, i, j] : pairs) {
+    if (match[i] >= 0 || used[j]) continue;
+    match[i] = j;
+    used[j] = 1;
+  }
+  for (std::size_t i = 0; i < incoming.size(); ++i) {
+    if (match[i] < 0 && near[i] && incoming[i].landmark_id < 0) match[i] = kTooClose;
+  }
+  return match;
+}
+
+// A random candidate on a 40 m field: covariances from round to long and thin, some with an
+// identity, a provenance or moving; `odd` also gives non-finite positions and covariances and
+// negative traces.
+MatchCandidate RandomCandidate(common::Rng* rng, bool odd) {
+  MatchCandidate c;
+  c.position = {rng->Uniform(-20.0, 20.0), rng->Uniform(-20.0, 20.0)};
+  const double a = rng->Uniform(0.0, 3.14159), l1 = std::pow(10.0, rng->Uniform(-3.0, 0.5));
+  const double l2 = l1 * std::pow(10.0, rng->Uniform(-3.0, 0.0));
+  const Eigen::Matrix2d r = Eigen::Rotation2Dd(a).toRotationMatrix();
+  c.covariance = r * Eigen::Vector2d(l1, l2).asDiagonal() * r.transpose();
+  if (rng->Uniform() < 0.1) c.landmark_id = rng->UniformInt(0, 5);
+  if (rng->Uniform() < 0.1)
+    c.origin = OriginKey(rng->UniformInt(0, 2), static_cast<std::uint32_t>(rng->UniformInt(0, 5)));
+  c.stationary = rng->Uniform() < 0.8;
+  if (odd) {
+    const double u = rng->Uniform();
+    if (u < 0.05) c.position.x() = std::numeric_limits<double>::quiet_NaN();
+    if (u >= 0.05 && u < 0.1) c.covariance(0, 0) = std::numeric_limits<double>::infinity();
+    if (u >= 0.1 && u < 0.15) c.covariance = -c.covariance;
+  }
+  return c;
+}
+
+// The index leaves out only pairs the plain form could not make: the same matches, marks and
+// order over random maps, including odd entries (which make it try every pair).
+TEST(MatchLandmarks, EqualsTryingEveryPair) {
+  common::Rng rng(7);
+  int matched = 0, too_close = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const bool odd = trial % 4 == 3;
+    std::vector<MatchCandidate> own(rng.UniformInt(0, 60)), incoming(rng.UniformInt(0, 60));
+    for (auto& c : own) c = RandomCandidate(&rng, odd);
+    for (auto& c : incoming) c = RandomCandidate(&rng, odd);
+    // Some incoming landmarks near own ones, as a peer's map of the same place gives.
+    for (std::size_t i = 0; i < incoming.size() && i < own.size(); i += 2) {
+      incoming[i].position = own[i].position + Eigen::Vector2d(rng.Normal(0.0, 0.3), rng.Normal(0.0, 0.3));
+    }
+    const double gate = common::ChiSquare2Quantile(trial % 2 == 0 ? 0.99 : 0.9999), too_close_m = trial % 3 * 0.5;
+    const std::vector<int> got = MatchLandmarks(own, incoming, gate, too_close_m);
+    ASSERT_EQ(got, MatchEveryPair(own, incoming, gate, too_close_m)) << "trial " << trial;
+    matched += static_cast<int>(std::count_if(got.begin(), got.end(), [](int m) { return m >= 0; }));
+    too_close += static_cast<int>(std::count(got.begin(), got.end(), kTooClose));
+  }
+  EXPECT_GT(matched, 1000);  // the case is exercised: many matches and marks
+  EXPECT_GT(too_close, 100);
 }
 
 }  // namespace
