@@ -23,7 +23,6 @@
 #include "robot_agent/cooperation/joint_tracker.h"
 #include "robot_agent/cooperation/sample_intake.h"
 #include "robot_agent/cooperation/sample_validation.h"
-#include "robot_agent/node/between_steps.h"
 #include "robot_agent/node/msg_conversion.h"
 #include "robot_agent/node/peer_endpoints.h"
 #include "robot_agent/node/peer_writer_pool.h"
@@ -65,10 +64,6 @@ struct AgentNode::Impl {
   std::map<std::string, std::uint64_t> bytes_sent_to, bytes_received_from;
   AgentCounters counters;
   std::uint32_t next_step = 1;
-  // The peer messages applied at the start of steps up to this one (in realtime perhaps the next
-  // step's, between the steps: BetweenSteps).
-  std::uint32_t applied_for = 0;
-  BetweenSteps between_steps;
   std::uint32_t restored_step = 0;    // the step of the snapshot restored at the start (0: none)
   std::size_t rendezvous_logged = 0;  // rendezvous() entries logged so far
   // Sensor steps buffered by step until the step is complete, taken only from the simulator.
@@ -205,7 +200,7 @@ struct AgentNode::Impl {
     }
     // Applied at the start of the step after its own (the messages of step k at step k + 1).
     std::uint32_t step = h.step;
-    if (h.step + 1 <= applied_for) {
+    if (h.step + 1 < next_step) {
       // Its step is past: stale in lockstep (the agent waited for what the clock announced);
       // in realtime late, applied at the next step (the cooperation still rejects one older
       // than a message of the same kind it applied from that sender).
@@ -214,7 +209,7 @@ struct AgentNode::Impl {
         return;
       }
       ++counters.peer_messages_late;
-      step = applied_for;
+      step = next_step - 1;
     }
     received[{h.sender, step}].insert(h.sequence);
     (inbox[step].*list).push_back(std::move(message));
@@ -231,7 +226,7 @@ struct AgentNode::Impl {
   }
 
   // How many peer messages to this agent the clock of step k announces from each sender (those
-  // sent during step k-1); none in realtime.
+  // sent during step k-1).
   std::map<std::string, std::uint32_t> Announced(const msg::StepClock& c) const {
     std::map<std::string, std::uint32_t> out;
     for (const auto& d : c.peer_deliveries()) {
@@ -249,11 +244,13 @@ struct AgentNode::Impl {
     return true;
   }
 
-  // In lockstep, peer messages of step sent_step beyond those the clock of the next step
-  // announces were written by someone other than the peers the simulator counted: contested, and
-  // none of that sender's messages of that step is used (which is genuine cannot be told).
-  // Forgets the counts of step sent_step.
-  void CheckPeerCounts(std::uint32_t sent_step, const std::map<std::string, std::uint32_t>& announced) {
+  // In lockstep, peer messages of step k-1 beyond those the clock of step k announces were
+  // written by someone other than the peers the simulator counted: contested, and none of that
+  // sender's messages of that step is used (which is genuine cannot be told). Forgets the counts
+  // of step k-1.
+  void CheckPeerCounts(const msg::StepClock& c) {
+    const std::uint32_t sent_step = c.stamp().step() - 1;
+    const auto announced = Announced(c);
     for (auto it = received.begin(); it != received.end();) {
       if (it->first.second != sent_step) {
         ++it;
@@ -537,7 +534,6 @@ struct AgentNode::Impl {
       throw AgentError("snapshot " + SnapshotPath() + ": does not read back as this agent's state");
     }
     restored_step = snapshot->step;
-    applied_for = snapshot->step;
     spdlog::info("restored the snapshot of step {}: going on from step {}", restored_step, next_step);
   }
 
@@ -554,24 +550,7 @@ struct AgentNode::Impl {
                        options.timeout_s);
   }
 
-  // In realtime, once due (BetweenSteps) and before the next step's data are all in: applies the
-  // peer messages of the step processed last, as its next step would at its start (what comes
-  // after is late, applied at the step after). Returns when to look again (the due time), if not
-  // done yet.
-  std::optional<Clock::time_point> ApplyBetweenSteps() {
-    if (options.lockstep || applied_for == next_step) return std::nullopt;
-    const auto due = between_steps.Due();
-    if (!due) return std::nullopt;
-    if (Clock::now() < *due) return due;
-    Drain();
-    if (StepReady()) return std::nullopt;  // the step applies them at its start
-    CheckPeerCounts(next_step - 1, {});
-    ApplyPeerMessages(next_step);
-    applied_for = next_step;
-    ++counters.applied_between_steps;
-    return std::nullopt;
-  }
-
+  // Processes the next step if all of it is here. Returns true if it did.
   // Applies the peer messages of step k-1, in a fixed order (sender, then sequence); also when
   // none came, as the own detections of the last step may pair with a peer's held ones.
   void ApplyPeerMessages(std::uint32_t k) {
@@ -604,25 +583,14 @@ struct AgentNode::Impl {
     }
   }
 
-  // Whether the next step's clock and sensor step from the simulator are in.
-  bool StepReady() const {
-    const auto& sim = simulator.simulator();
-    return sim && clock.count(next_step) > 0 && sensors.Has(next_step, *sim);
-  }
-
-  // Processes the next step if all of it is here, the peer messages of the step before applied
-  // first (unless they were between the steps). Returns true if it did.
   bool TryProcess(bool* last) {
-    if (!StepReady()) return false;
     const std::uint32_t k = next_step;
     const auto& sim = simulator.simulator();
+    if (!sim || !clock.count(k) || !sensors.Has(k, *sim)) return false;
     if (!PeerMessagesComplete(clock[k])) return false;
-    between_steps.Started(k, Clock::now());
-    const bool applied = applied_for == k;  // in realtime, between the steps
-    if (!applied) CheckPeerCounts(k - 1, Announced(clock[k]));
+    CheckPeerCounts(clock[k]);
     const double cpu_start_s = common::ThreadCpuSeconds();
-    if (!applied) ApplyPeerMessages(k);
-    applied_for = k;
+    ApplyPeerMessages(k);
     const std::uint32_t foreign_before = counters.rejected.Of(cooperation::Rejection::kForeignWriter);
     const common::SensorStep step = sensors.Take(k, *sim, &counters.rejected);
     if (const auto foreign = counters.rejected.Of(cooperation::Rejection::kForeignWriter) - foreign_before;
@@ -709,10 +677,8 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
       progressed = true;
       if (last) {
         a.Flush();
-        spdlog::info(
-            "agent {} done: {} steps, rejected: {}, peer messages applied a step late: {}, applied between steps: {}",
-            a.agent.robot_id, a.counters.steps_processed, a.counters.rejected.Describe(), a.counters.peer_messages_late,
-            a.counters.applied_between_steps);
+        spdlog::info("agent {} done: {} steps, rejected: {}, peer messages applied a step late: {}", a.agent.robot_id,
+                     a.counters.steps_processed, a.counters.rejected.Describe(), a.counters.peer_messages_late);
         if (a.counters.rejected.Failing() > 0 && !a.options.allow_rejected) {
           throw AgentError("agent " + a.agent.robot_id + " rejected " + a.counters.rejected.Describe() +
                            " input(s): the run's numbers cannot be trusted (--allow-rejected accepts them)");
@@ -722,11 +688,7 @@ bool AgentNode::Run(const std::atomic<bool>& stop) {
     }
     if (progressed) last_progress = Clock::now();
     if (Clock::now() - last_progress > timeout) throw AgentError(a.NoStepWhy());
-    auto wait = milliseconds(100);
-    if (const auto due = a.ApplyBetweenSteps()) {
-      wait = std::clamp(std::chrono::ceil<milliseconds>(*due - Clock::now()), milliseconds(0), wait);
-    }
-    a.notifier.Wait(&seen, wait);
+    a.notifier.Wait(&seen, milliseconds(100));
   }
   return false;
 }

@@ -51,8 +51,6 @@ struct AgentCounters {
   cooperation::RejectionCounts rejected;
   // Realtime: peer messages of a step already past, applied at the next step.
   std::uint32_t peer_messages_late = 0;
-  // Realtime: steps whose peer messages were applied between the steps (BetweenSteps).
-  std::uint32_t applied_between_steps = 0;
 };
 
 // A robot agent's DDS node: reads only its own robot's sensor topic (lidar, IMU and odometry) and the
