@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -211,8 +210,8 @@ class OwnIndex {
   explicit OwnIndex(const std::vector<MatchCandidate>& own) {
     for (int j = 0; j < static_cast<int>(own.size()); ++j) {
       const MatchCandidate& o = own[j];
-      if (o.landmark_id >= 0) by_id_.emplace(o.landmark_id, j);
-      if (o.origin >= 0) by_origin_.emplace(o.origin, j);
+      if (o.landmark_id >= 0) by_id_.emplace_back(o.landmark_id, j);
+      if (o.origin >= 0) by_origin_.emplace_back(o.origin, j);
       // A position that is not finite pairs with nothing by position (d is not a number).
       if (!o.position.allFinite()) continue;
       by_x_.emplace_back(o.position.x(), j);
@@ -221,12 +220,20 @@ class OwnIndex {
       max_trace_ = std::max(max_trace_, trace);
       min_trace_ = std::min(min_trace_, trace);
     }
+    std::sort(by_id_.begin(), by_id_.end());
+    std::sort(by_origin_.begin(), by_origin_.end());
     std::sort(by_x_.begin(), by_x_.end());
   }
 
-  // The own indices with this identity or provenance.
-  auto WithId(int id) const { return by_id_.equal_range(id); }
-  auto WithOrigin(std::int64_t origin) const { return by_origin_.equal_range(origin); }
+  // Calls fn(j) for every own j with this identity or provenance.
+  template <typename Fn>
+  void ForEachWithId(std::int64_t id, Fn&& fn) const {
+    ForEachWithKey(by_id_, id, fn);
+  }
+  template <typename Fn>
+  void ForEachWithOrigin(std::int64_t origin, Fn&& fn) const {
+    ForEachWithKey(by_origin_, origin, fn);
+  }
 
   // Calls fn(j) for every own j that may pair with `in` by position (a superset: at most the
   // x-window that the bound above allows; every own landmark if the bound does not hold).
@@ -240,14 +247,20 @@ class OwnIndex {
       reach = std::max(too_close_m, std::sqrt(gate_d2 * (in_trace + max_trace_)) * kSlack);
     }
     const double x = in.position.x();
-    auto it =
-        std::isinf(reach) ? by_x_.begin() : std::lower_bound(by_x_.begin(), by_x_.end(), std::make_pair(x - reach, -1));
+    auto it = std::lower_bound(by_x_.begin(), by_x_.end(), std::make_pair(x - reach, -1));
     for (; it != by_x_.end() && it->first <= x + reach; ++it) fn(it->second);
   }
 
  private:
-  std::multimap<int, int> by_id_;
-  std::multimap<std::int64_t, int> by_origin_;
+  using Keyed = std::vector<std::pair<std::int64_t, int>>;  // (key, own index), sorted
+  template <typename Fn>
+  static void ForEachWithKey(const Keyed& keyed, std::int64_t key, Fn&& fn) {
+    auto it = std::lower_bound(keyed.begin(), keyed.end(), std::make_pair(key, -1));
+    for (; it != keyed.end() && it->first == key; ++it) fn(it->second);
+  }
+
+  Keyed by_id_;
+  Keyed by_origin_;
   std::vector<std::pair<double, int>> by_x_;
   double max_trace_ = 0.0;
   double min_trace_ = 0.0;
@@ -264,13 +277,11 @@ std::vector<int> MatchLandmarks(const std::vector<MatchCandidate>& own, const st
   for (int i = 0; i < static_cast<int>(incoming.size()); ++i) {
     const MatchCandidate& in = incoming[i];
     // Both with identities: equal ones match, no other pairing. Else equal provenance matches.
-    if (in.landmark_id >= 0) {
-      for (auto [it, end] = index.WithId(in.landmark_id); it != end; ++it) pairs.emplace_back(-1.0, i, it->second);
-    }
+    if (in.landmark_id >= 0) index.ForEachWithId(in.landmark_id, [&](int j) { pairs.emplace_back(-1.0, i, j); });
     if (in.origin >= 0) {
-      for (auto [it, end] = index.WithOrigin(in.origin); it != end; ++it) {
-        if (in.landmark_id < 0 || own[it->second].landmark_id < 0) pairs.emplace_back(-1.0, i, it->second);
-      }
+      index.ForEachWithOrigin(in.origin, [&](int j) {
+        if (in.landmark_id < 0 || own[j].landmark_id < 0) pairs.emplace_back(-1.0, i, j);
+      });
     }
     index.ForEachNear(in, gate_d2, too_close_m, [&](int j) {
       const MatchCandidate& o = own[j];
