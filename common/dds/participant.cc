@@ -8,6 +8,7 @@
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 
+#include "common/dds/discovery_server.h"
 #include "common/dds/identity_check.h"
 #include "common/dds/security.h"
 
@@ -76,6 +77,11 @@ Participant::Participant(const ParticipantOptions& options) : history_steps_(opt
     throw DdsError("DDS participant profile '" + profile + "' missing from " + ProfilesPath());
   }
   qos.name(options.name);
+  if (options.serve_discovery_at.empty()) {
+    UseDiscoveryServerFromEnvironment(&qos);
+  } else {
+    ServeDiscovery(options.serve_discovery_at, &qos);
+  }
   if (!options.security_dir.empty()) Secure(options, &qos);
   participant_ = factory->create_participant(options.domain, qos, nullptr, fdds::StatusMask::none());
   if (participant_ == nullptr) {

@@ -57,6 +57,10 @@ struct ParticipantOptions {
   // keeps for a reader that joins late (a restarted process), and so the memory of the DDS layer.
   // 0: the profiles' depth (which covers a whole run).
   int history_steps = 0;
+  // HOST:PORT where this participant serves discovery to the run's others (docs/dds.md,
+  // "Discovery"); empty: it discovers as MRSLAM_DISCOVERY_SERVER says (through that server when
+  // set, else by announcements to every participant).
+  std::string serve_discovery_at{};
 };
 
 // How much of a stream DDS keeps: the participant's history_steps, or (a stream written once at

@@ -15,6 +15,8 @@ namespace mrslam::launch {
 
 int MetatrafficUnicastPort(int domain) { return 7400 + 250 * domain + 10; }
 
+std::string DiscoveryServerAddress(int domain) { return "127.0.0.1:" + std::to_string(7100 + domain); }
+
 bool DomainLooksFree(int domain) {
   const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return false;

@@ -2,6 +2,8 @@
 
 #include <sys/types.h>
 
+#include <string>
+
 // Choosing a DDS domain that no other run on this host uses.
 namespace mrslam::launch {
 
@@ -13,6 +15,10 @@ constexpr int kLastAutoDomain = 232;
 // The UDP unicast port of participant 0's metatraffic in domain d (RTPS port mapping:
 // PB 7400 + DG 250 * d + d1 10 + PG 2 * participant id).
 int MetatrafficUnicastPort(int domain);
+
+// Where a run on domain d serves discovery (mrslam_launch --discovery-server): 127.0.0.1 and a
+// port below the RTPS ports of every domain (7100 + d), so the domain's hold covers it too.
+std::string DiscoveryServerAddress(int domain);
 
 // True when no process holds participant 0's metatraffic port of the domain (a bind test).
 bool DomainLooksFree(int domain);

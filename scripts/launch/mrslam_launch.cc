@@ -24,6 +24,7 @@
 #include "common/config/scenario_flags.h"
 #include "common/config/scenario_options.h"
 #include "common/cpu_clock.h"
+#include "common/dds/discovery_server.h"
 #include "common/dds/participant.h"
 #include "common/progress_line.h"
 #include "common/seed_range.h"
@@ -75,6 +76,7 @@ struct LaunchFlags {
   int restarts = 0;               // --restart: how many times a dead agent is started again
   bool low_latency = false;       // --low-latency: CPUs kept from sleeping while the runs last
   bool low_latency_held = false;  // whether the kernel took that request
+  bool discovery_server = false;  // --discovery-server: the launcher's participant serves discovery
 };
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
@@ -250,7 +252,13 @@ struct RestartRecord {
   std::map<std::string, std::vector<double>> comeback_s;  // by robot id
 };
 
-int FinishSummary(const std::string& dir, const RunCost& cost, int domain, bool low_latency,
+// How the run's processes ran: the CPUs kept awake, discovery through the launcher's server.
+struct RunConditions {
+  bool low_latency = false;
+  bool discovery_server = false;
+};
+
+int FinishSummary(const std::string& dir, const RunCost& cost, int domain, const RunConditions& conditions,
                   const RestartRecord& restarted, json* summary_out) {
   const std::string summary_path = dir + "/summary.json";
   std::ifstream in(summary_path);
@@ -272,7 +280,8 @@ int FinishSummary(const std::string& dir, const RunCost& cost, int domain, bool 
   summary["cpu_seconds"] = cost.cpu_s;
   summary["cpu_cores_mean"] = cost.wall_s > 0.0 ? cost.cpu_s / cost.wall_s : 0.0;
   summary["dds_domain"] = domain;
-  summary["low_latency"] = low_latency;
+  summary["low_latency"] = conditions.low_latency;
+  summary["discovery_server"] = conditions.discovery_server;
   json& peak = summary["peak_rss_mib"] = json::object();
   for (const auto& [name, kib] : cost.peak_rss_kib) peak[name] = static_cast<double>(kib) / 1024.0;
   if (summary.contains("robots") && summary["robots"].is_object()) {
@@ -351,12 +360,19 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
   const double cpu_start = common::ProcessTreeCpuSeconds();
   std::vector<std::string> robot_ids;
   for (const auto& r : scenario.robots) robot_ids.push_back(r.id);
-  // The monitor joins first, to see the evaluator join.
+  // The monitor joins first, to see the evaluator join. With --discovery-server it is the run's
+  // discovery server, named to the children in their environment: without it they would find no one.
+  const std::string server = flags.discovery_server ? DiscoveryServerAddress(domain) : "";
+  if (!server.empty()) setenv(dds::kDiscoveryServerVariable, server.c_str(), 1);
   std::unique_ptr<ProgressMonitor> monitor;
   try {
-    monitor =
-        std::make_unique<ProgressMonitor>(domain, flags.common.shared_memory, flags.common.security_dir, robot_ids);
+    monitor = std::make_unique<ProgressMonitor>(domain, flags.common.shared_memory, flags.common.security_dir,
+                                                robot_ids, server);
   } catch (const std::exception& e) {
+    if (!server.empty()) {
+      std::cerr << kName << ": error: cannot serve discovery at " << server << " (" << e.what() << ")\n";
+      return kFailed;
+    }
     std::cerr << kName << ": warning: no progress display (" << e.what() << ")\n";
   }
   ProcessSupervisor children;
@@ -427,7 +443,8 @@ int RunSeed(const LaunchFlags& flags, const common::ScenarioOptions& scenario, c
     return monitor_joined && !first_step_at ? kFailedBeforeStep1 : kFailed;
   }
   const RunCost cost{Seconds(Clock::now() - start), common::ProcessTreeCpuSeconds() - cpu_start, end.peak_rss_kib};
-  return FinishSummary(dir, cost, domain, flags.low_latency_held, {end.restarts, comebacks.seconds()}, summary_out);
+  return FinishSummary(dir, cost, domain, {flags.low_latency_held, flags.discovery_server},
+                       {end.restarts, comebacks.seconds()}, summary_out);
 }
 
 // What a finished seed prints: one line in a multi-seed run, else the summary table, the outputs
@@ -492,6 +509,8 @@ int Main(LaunchFlags flags) {
   if (!flags.seeds.empty() && flags.common.seed >= 0) throw std::runtime_error("give --seed or --seeds, not both");
   if (flags.secure && !flags.common.security_dir.empty())
     throw std::runtime_error("give --secure or --security, not both");
+  if (flags.discovery_server && (flags.secure || !flags.common.security_dir.empty()))
+    throw std::runtime_error("--discovery-server does not work with DDS-Security (--secure, --security) yet");
   if (!flags.common.security_dir.empty()) flags.common.security_dir = fs::absolute(flags.common.security_dir).string();
   const std::vector<long long> seeds = flags.seeds.empty()
                                            ? std::vector<long long>{static_cast<long long>(scenario.seed)}
@@ -596,6 +615,10 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
                "Ask the kernel to keep the CPUs from sleeping while the runs last (/dev/cpu_dma_latency, root only): "
                "a DDS sample then wakes its reader sooner; idle CPUs poll instead of halting. Without "
                "permission, a warning and the runs go on without it");
+  app.add_flag("--discovery-server", flags->discovery_server,
+               "Discovery through a server in the launcher instead of every process announcing itself to every "
+               "other: each process learns only of the participants and endpoints that share its topics (cheaper "
+               "for large teams; data still flows directly; docs/dds.md)");
   app.add_flag("--secure", flags->secure,
                "DDS-Security on: make identities for the run's processes into OUT/security and pass --security to "
                "every process (docs/security.md)");

@@ -35,8 +35,9 @@ struct ProgressMonitor::Impl {
   dds::Reader<msg::StepClockPubSubType> clock;
   std::map<std::string, std::unique_ptr<dds::Reader<msg::EstimatePubSubType>>> estimates;
 
-  Impl(int domain, bool shared_memory, const std::string& security_dir, const std::vector<std::string>& robot_ids)
-      : participant({domain, "mrslam_launch", shared_memory, security_dir, "monitor"}),
+  Impl(int domain, bool shared_memory, const std::string& security_dir, const std::vector<std::string>& robot_ids,
+       const std::string& serve_discovery_at)
+      : participant({domain, "mrslam_launch", shared_memory, security_dir, "monitor", 0, serve_discovery_at}),
         clock(participant, dds::kClockTopic) {
     participant.get()->set_listener(&discovery, eprosima::fastdds::dds::StatusMask::none());
     for (const auto& id : robot_ids) {
@@ -50,8 +51,8 @@ struct ProgressMonitor::Impl {
 };
 
 ProgressMonitor::ProgressMonitor(int domain, bool shared_memory, const std::string& security_dir,
-                                 const std::vector<std::string>& robot_ids)
-    : impl_(std::make_unique<Impl>(domain, shared_memory, security_dir, robot_ids)) {
+                                 const std::vector<std::string>& robot_ids, const std::string& serve_discovery_at)
+    : impl_(std::make_unique<Impl>(domain, shared_memory, security_dir, robot_ids, serve_discovery_at)) {
   for (const auto& id : robot_ids) last_step_[id] = 0;
 }
 

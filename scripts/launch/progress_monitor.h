@@ -24,9 +24,10 @@ struct Progress {
 class ProgressMonitor {
  public:
   // Throws mrslam::dds::DdsError when the participant or a reader cannot be created.
-  // With a security folder, it joins with the identity "monitor".
+  // With a security folder, it joins with the identity "monitor". With serve_discovery_at
+  // (HOST:PORT) its participant is the run's discovery server (it then sees every participant).
   ProgressMonitor(int domain, bool shared_memory, const std::string& security_dir,
-                  const std::vector<std::string>& robot_ids);
+                  const std::vector<std::string>& robot_ids, const std::string& serve_discovery_at = "");
   ~ProgressMonitor();
   ProgressMonitor(const ProgressMonitor&) = delete;
   ProgressMonitor& operator=(const ProgressMonitor&) = delete;

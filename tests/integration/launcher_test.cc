@@ -54,6 +54,7 @@ constexpr int kForeignDomain = 126;
 constexpr int kSmootherDomain = 127;
 constexpr int kShmKillDomain = 128;
 constexpr int kStopDomain = 129;
+constexpr int kDiscoveryServerDomain = 112;
 
 constexpr int kShortSteps = 12;
 
@@ -162,6 +163,7 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
   ExpectFiniteAtLeast(summary, "cpu_seconds", 1e-3, "run");
   ExpectFiniteAtLeast(summary, "cpu_cores_mean", 1e-3, "run");
   EXPECT_EQ(summary.value("low_latency", true), false);  // no request to keep the CPUs awake without the flag
+  EXPECT_EQ(summary.value("discovery_server", true), false);
   EXPECT_LE(summary["cpu_cores_mean"].get<double>(), static_cast<double>(std::thread::hardware_concurrency()) + 0.5);
   // Every process's peak memory: more than a megabyte, less than the machine's.
   ASSERT_TRUE(summary.contains("peak_rss_mib")) << summary.dump(2);
@@ -343,6 +345,29 @@ TEST(LauncherTest, AnAgentStoppedFor5SecondsChangesNoNumber) {
     const std::string expected = ReadFile(reference + "/" + file);
     EXPECT_FALSE(expected.empty()) << file;
     EXPECT_TRUE(ReadFile(stopped + "/" + file) == expected) << file << " differs after a 5 s SIGSTOP";
+  }
+}
+
+// Discovery through the launcher's server changes who learns of whom, not what flows: the same
+// lockstep run gives the same numbers.
+TEST(LauncherTest, DiscoveryThroughTheLaunchersServerChangesNoNumber) {
+  unsetenv("MRSLAM_DOMAIN");
+  const testing::TempDir temp_dir("mrslam-launch-discovery-server");
+  const std::string reference = temp_dir.path() + "/reference";
+  const std::string served = temp_dir.path() + "/served";
+  const std::vector<std::string> extra = {"--set", "run.steps=" + std::to_string(kShortSteps), "--no-plots"};
+  ChildProcess first(LaunchArgs(reference, kDiscoveryServerDomain, extra), reference + ".log");
+  ASSERT_EQ(first.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(reference + ".log");
+  std::vector<std::string> with_server = extra;
+  with_server.emplace_back("--discovery-server");
+  ChildProcess launcher(LaunchArgs(served, kDiscoveryServerDomain, with_server), served + ".log");
+  ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(served + ".log");
+  const auto summary = nlohmann::json::parse(ReadFile(served + "/summary.json"));
+  EXPECT_EQ(summary.value("discovery_server", false), true);
+  for (const char* file : {"metrics.csv", "trajectories/r1_estimate.tum", "trajectories/r2_estimate.tum"}) {
+    const std::string expected = ReadFile(reference + "/" + file);
+    EXPECT_FALSE(expected.empty()) << file;
+    EXPECT_TRUE(ReadFile(served + "/" + file) == expected) << file << " differs with discovery through the server";
   }
 }
 

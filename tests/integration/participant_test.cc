@@ -1,12 +1,17 @@
 // The QoS a participant gives its writers and transports, as built from config/dds_profiles.xml:
-// the history depth per stream, when readers acknowledge, and the UDP socket sizes; and the type
-// supports it constructs.
+// the history depth per stream, when readers acknowledge, and the UDP socket sizes; the type
+// supports it constructs; and discovery through a server (MRSLAM_DISCOVERY_SERVER).
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cstdlib>
 #include <memory>
+#include <string>
+#include <thread>
 
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
+#include "common/dds/discovery_server.h"
 #include "common/dds/participant.h"
 #include "mrslamPubSubTypes.h"
 
@@ -79,6 +84,81 @@ TEST(ParticipantTest, ATypeSupportIsConstructedOncePerParticipant) {
   }
   const dds::Reader<CountedFactorBatchType> again(participant, dds::PeerTopic("r1", "r2", "factors"));
   EXPECT_EQ(constructed, 1);
+}
+
+using eprosima::fastrtps::rtps::DiscoveryProtocol_t;
+
+// Sets MRSLAM_DISCOVERY_SERVER while it lives.
+class DiscoveryServerVariable {
+ public:
+  explicit DiscoveryServerVariable(const std::string& value) {
+    setenv(dds::kDiscoveryServerVariable, value.c_str(), 1);
+  }
+  ~DiscoveryServerVariable() { unsetenv(dds::kDiscoveryServerVariable); }
+  DiscoveryServerVariable(const DiscoveryServerVariable&) = delete;
+  DiscoveryServerVariable& operator=(const DiscoveryServerVariable&) = delete;
+};
+
+const std::string kServer = "127.0.0.1:7208";  // mrslam_launch's address for domain 108
+
+dds::ParticipantOptions ServerOptions() {
+  dds::ParticipantOptions options = Options();
+  options.name = "participant_test_server";
+  options.serve_discovery_at = kServer;
+  return options;
+}
+
+bool WaitForMatch(const dds::Writer<msg::StepClockPubSubType>& writer, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (writer.MatchedReaders() == 0 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return writer.MatchedReaders() > 0;
+}
+
+TEST(ParticipantTest, WithoutTheVariableAParticipantAnnouncesItselfToEveryOther) {
+  unsetenv(dds::kDiscoveryServerVariable);
+  dds::Participant participant(Options());
+  EXPECT_EQ(participant.get()->get_qos().wire_protocol().builtin.discovery_config.discoveryProtocol,
+            DiscoveryProtocol_t::SIMPLE);
+}
+
+TEST(ParticipantTest, AnAddressThatIsNotHostAndPortIsOneClearError) {
+  for (const std::string bad : {"nonsense", "127.0.0.1", "127.0.0.1:port"}) {
+    const DiscoveryServerVariable variable(bad);
+    try {
+      dds::Participant participant(Options());
+      ADD_FAILURE() << bad << " was taken";
+    } catch (const dds::DdsError& e) {
+      EXPECT_EQ(std::string(e.what()), "MRSLAM_DISCOVERY_SERVER '" + bad + "' is not HOST:PORT");
+    }
+  }
+  dds::ParticipantOptions options = ServerOptions();
+  options.serve_discovery_at = "localhost";
+  EXPECT_THROW(dds::Participant{options}, dds::DdsError);
+}
+
+// Two clients of one server find each other through it; a participant of the same domain that
+// does not use the server finds neither.
+TEST(ParticipantTest, ClientsOfAServerFindEachOtherAndNoOneElse) {
+  unsetenv(dds::kDiscoveryServerVariable);
+  dds::Participant outsider(Options());
+  const dds::Writer<msg::StepClockPubSubType> outsiders_writer(outsider, dds::kClockTopic);
+  dds::Participant server(ServerOptions());
+  EXPECT_EQ(server.get()->get_qos().wire_protocol().builtin.discovery_config.discoveryProtocol,
+            DiscoveryProtocol_t::SERVER);
+  const DiscoveryServerVariable variable(kServer);
+  dds::Participant writing(Options()), reading(Options());
+  EXPECT_EQ(writing.get()->get_qos().wire_protocol().builtin.discovery_config.discoveryProtocol,
+            DiscoveryProtocol_t::CLIENT);
+  const dds::Writer<msg::StepClockPubSubType> writer(writing, dds::kClockTopic);
+  const dds::Reader<msg::StepClockPubSubType> reader(reading, dds::kClockTopic);
+  ASSERT_TRUE(WaitForMatch(writer, std::chrono::seconds(10)));
+  EXPECT_EQ(writer.MatchedReaders(), 1);
+  // The outsider announces itself by multicast, which the clients do not listen to, and they
+  // announce themselves only to the server: well past the profiles' first announcements (10 at
+  // 20 ms) it has matched no one.
+  EXPECT_FALSE(WaitForMatch(outsiders_writer, std::chrono::milliseconds(1500)));
 }
 
 }  // namespace
