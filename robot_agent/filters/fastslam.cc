@@ -43,6 +43,13 @@ double ChordLength(double v, double w, double dt, int n) {
   return std::abs(v * dt * std::sin(n * half) / std::sin(half));
 }
 
+// Whether a peer landmark's heading is worth fusing: a state with one, and the peer's known better
+// than half the uniform variance.
+template <int D>
+bool PeerHeadingKnown(const MapLandmark& peer) {
+  return D > 2 && peer.covariance(2, 2) < 0.5 * kUnknownHeadingVar;
+}
+
 // Accessors that exist for some state dimensions only: speed, turn rate and heading (variance
 // and covariances with x, y) of lane l. Static landmarks have none.
 template <int D>
@@ -897,8 +904,6 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, MapFusionRul
   if (in.empty()) return 0;
   map_estimate_.value.reset();
   const double gate = common::ChiSquare2Quantile(gate_probability);
-  // A peer heading is used when it is known better than half the uniform variance.
-  const auto heading_known = [](const Eigen::Matrix3d& c) { return c(2, 2) < 0.5 * kUnknownHeadingVar; };
   std::vector<MatchCandidate> incoming;
   incoming.reserve(in.size());
   for (const auto& l : in) {
@@ -907,19 +912,17 @@ int FastSlam<D>::MergeLandmarks(const std::vector<MapLandmark>& in, MapFusionRul
   }
   std::vector<std::uint32_t> new_ids(in.size(), 0);  // one track id per added landmark
   std::vector<MatchCandidate> own;
+  FusedBlocks fused;
   for (Particle& particle : particles_) {
     OwnCandidates(particle, &own);
     const std::vector<int> match = MatchLandmarks(own, incoming, gate, too_close_m);
+    FuseMatches(&particle, match, in, rule, &fused);
     for (std::size_t i = 0; i < in.size(); ++i) {
       const MapLandmark& peer = in[i];
-      if (match[i] == kTooClose) continue;
-      const bool peer_heading = D > 2 && heading_known(peer.covariance);
-      if (match[i] >= 0) {
-        FusePeerLandmark(&particle, match[i], peer, peer_heading, rule);
-      } else if (!Lost(peer.covariance(0, 0), peer.covariance(0, 1), peer.covariance(1, 1))) {
-        // Unmatched: a new landmark in this particle, from the peer's estimate, unless it is
-        // already too uncertain to keep (it would leave the map at once).
-        AddPeerLandmark(&particle, peer, peer_heading, &new_ids[i]);
+      // Unmatched: a new landmark in this particle, from the peer's estimate, unless it is
+      // already too uncertain to keep (it would leave the map at once).
+      if (match[i] == -1 && !Lost(peer.covariance(0, 0), peer.covariance(0, 1), peer.covariance(1, 1))) {
+        AddPeerLandmark(&particle, peer, PeerHeadingKnown<D>(peer), &new_ids[i]);
       }
     }
   }
@@ -945,11 +948,42 @@ void FastSlam<D>::OwnCandidates(const Particle& particle, std::vector<MatchCandi
 }
 
 template <int D>
-void FastSlam<D>::FusePeerLandmark(Particle* particle, int slot, const MapLandmark& peer, bool peer_heading,
-                                   MapFusionRule rule) {
-  Block* block = MutableBlock(particle, slot / kLanes);
-  const int lane = slot % kLanes;
-  const bool fuse_heading = peer_heading && !block->meta[lane].position_only;
+void FastSlam<D>::FuseMatches(Particle* particle, const std::vector<int>& match, const std::vector<MapLandmark>& in,
+                              MapFusionRule rule, FusedBlocks* fused) {
+  LanePeers none;
+  none.fill(-1);
+  std::vector<LanePeers> peers(particle->blocks.size(), none);
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    if (match[i] >= 0) peers[match[i] / kLanes][match[i] % kLanes] = static_cast<int>(i);
+  }
+  const auto fuse = [&](Block* block, const LanePeers& lanes) {
+    for (int l = 0; l < kLanes; ++l) {
+      if (lanes[l] >= 0) FusePeerLandmark(block, l, in[lanes[l]], rule);
+    }
+  };
+  for (std::size_t b = 0; b < peers.size(); ++b) {
+    if (peers[b] == none) continue;
+    std::shared_ptr<Block>& block = particle->blocks[b];
+    if (block.use_count() == 1) {  // this particle's alone (a block fused once is held by fused too)
+      fuse(block.get(), peers[b]);
+      continue;
+    }
+    const auto [first, last] = fused->equal_range(block.get());
+    const auto same = std::find_if(first, last, [&](const auto& entry) { return entry.second.peers == peers[b]; });
+    if (same != last) {
+      block = same->second.fused;
+      continue;
+    }
+    auto copy = std::make_shared<Block>(*block);
+    fuse(copy.get(), peers[b]);
+    fused->emplace(block.get(), FusedBlock{block, peers[b], copy});
+    block = std::move(copy);
+  }
+}
+
+template <int D>
+void FastSlam<D>::FusePeerLandmark(Block* block, int lane, const MapLandmark& peer, MapFusionRule rule) {
+  const bool fuse_heading = PeerHeadingKnown<D>(peer) && !block->meta[lane].position_only;
   StateVector<D> x = block->MeanVector(lane);
   StateMatrix<D> p = block->CovMatrix(lane);
   bool fused = false;

@@ -1,9 +1,11 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -111,7 +113,8 @@ class FastSlam : public SlamFilter {
   // every particle under one new track id each, confirmed (the peer confirmed them), except those
   // whose position standard deviation exceeds max_landmark_position_sd_m (step 6) and, per
   // particle, the static ones too close to a static own landmark (kTooClose). Blocks
-  // are written through MutableBlock, so copy-on-write sharing stays intact.
+  // are copied before they are written, so copy-on-write sharing stays intact, and a block that
+  // several particles share and that meets the same matches in each is fused once for all.
   int MergeLandmarks(const std::vector<MapLandmark>& landmarks_in_own_frame, MapFusionRule rule,
                      double gate_probability, double too_close_m) override;
   // Cooperative localization: log w_p += log N(nu_p; 0, S_p), nu_p = z - h(pose_p, position),
@@ -188,11 +191,25 @@ class FastSlam : public SlamFilter {
   void SamplePose(Particle* particle, const PoseProposal& proposal);
   // Step 5: the matched landmarks' updates at the sampled pose (queued in batch), new landmarks.
   void UpdateLandmarks(int p, const std::vector<Detection>& detections, UpdateBatch<D>* batch);
-  // MergeLandmarks' steps for one particle: its landmarks as match candidates; a peer landmark
-  // fused into the own one at slot; a new landmark from a peer's (with a new track id, one per
-  // peer landmark across the particles: *track_id, 0 until set), and its state.
+  // A block that a merge fused for one particle, kept for the others that hold the same block
+  // with the same matches (after resampling the particles share most blocks): it is fused once
+  // and shared, as resampling left it, rather than copied and fused per particle.
+  using LanePeers = std::array<int, kLanes>;  // the incoming landmark fused into each lane, -1: none
+  struct FusedBlock {
+    std::shared_ptr<Block> original;  // held for the merge, so that no new block takes its address
+    LanePeers peers;
+    std::shared_ptr<Block> fused;
+  };
+  using FusedBlocks = std::unordered_multimap<const Block*, FusedBlock>;
+  // MergeLandmarks' steps for one particle: its landmarks as match candidates; the incoming
+  // landmarks fused into the own ones they matched (match[i]: incoming i's slot), each block
+  // through fused; a peer landmark fused into a block's lane; a new landmark from a peer's (with
+  // a new track id, one per peer landmark across the particles: *track_id, 0 until set), and its
+  // state.
   void OwnCandidates(const Particle& particle, std::vector<MatchCandidate>* own) const;
-  void FusePeerLandmark(Particle* particle, int slot, const MapLandmark& peer, bool peer_heading, MapFusionRule rule);
+  static void FuseMatches(Particle* particle, const std::vector<int>& match, const std::vector<MapLandmark>& in,
+                          MapFusionRule rule, FusedBlocks* fused);
+  static void FusePeerLandmark(Block* block, int lane, const MapLandmark& peer, MapFusionRule rule);
   void AddPeerLandmark(Particle* particle, const MapLandmark& peer, bool peer_heading, std::uint32_t* track_id);
   void SetPeerState(Block* block, int lane, const MapLandmark& peer, bool peer_heading, bool stationary);
   // The reading noise R = diag(var_r, var_b).

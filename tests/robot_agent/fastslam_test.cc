@@ -398,6 +398,38 @@ TEST(FastSlam, ResamplingSharesLandmarkStorage) {
   }
 }
 
+// Merging a peer's map fuses a block that particles share, and in which they match the same peer
+// landmarks, once for all of them: they go on sharing the fused block. The peer here knows what
+// this robot knows, so every particle matches its landmarks. A robot drives past 24 static landmarks, resampling every
+// step, so that those behind it are held in blocks that descend from few ancestors.
+TEST(FastSlam, MergingFusesASharedBlockOnceForAllItsParticles) {
+  common::ScenarioOptions o = OneRobotScenario(1.0, 0.0, 100);
+  o.robots[0].initial_pose = {0.0, 0.0, 0.0};
+  o.sensors.lidar.max_range_m = 6.0;
+  for (int i = 0; i < 24; ++i) AddLandmark(&o, i + 1, {1.0 * i, i % 2 ? 2.0 : -2.0, 0.0});
+  o.filter.resample_every_step = true;
+  TinyWorld world(o, 4);
+  FastSlam<2> filter(common::AgentOptionsFor(o, "r1"), 4);
+  for (int k = 0; k < 70; ++k) filter.Process(world.Step());
+  const auto distinct_blocks = [&] {
+    std::set<const void*> distinct;
+    for (int p = 0; p < filter.NumParticles(); ++p) {
+      for (const void* b : filter.LandmarkStorage(p)) distinct.insert(b);
+    }
+    return distinct.size();
+  };
+  std::size_t held = 0;  // blocks held, a block held by n particles counted n times
+  for (int p = 0; p < filter.NumParticles(); ++p) held += filter.LandmarkStorage(p).size();
+  const std::size_t before = distinct_blocks();
+  ASSERT_LT(2 * before, held);
+  const std::vector<MapLandmark> peer = filter.Estimate().landmarks;
+  ASSERT_FALSE(peer.empty());
+  EXPECT_EQ(filter.MergeLandmarks(peer, robot_agent::MapFusionRule::kCovarianceIntersection, 0.999, 0.0), 0);
+  // Here every particle that shares a block matches the same peer landmarks in it: one fused block
+  // for each block there was (copies per particle would make all of those held distinct).
+  EXPECT_EQ(distinct_blocks(), before);
+}
+
 // Constant turn rate: prediction leaves the landmarks taken as static alone, so their blocks
 // stay shared between the copies resampling made. A robot drives past 24 static landmarks,
 // resampling every step; once they are all behind it, out of view, the particles' first blocks
