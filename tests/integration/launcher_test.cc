@@ -321,6 +321,16 @@ TEST(LauncherTest, AKilledAgentUnderShmLeavesNothingInDevShm) {
 
 // An agent stopped (SIGSTOP) for 5 s in lockstep, less than run.ack_timeout_s, only delays the
 // run: its numbers are byte for byte those of the same run without the stop.
+// The two-robot runs in reference and other wrote the same metrics.csv and estimate trajectories
+// (and not empty ones); `how` says what was different about other.
+void ExpectSameNumbers(const std::string& reference, const std::string& other, const std::string& how) {
+  for (const char* file : {"metrics.csv", "trajectories/r1_estimate.tum", "trajectories/r2_estimate.tum"}) {
+    const std::string expected = ReadFile(reference + "/" + file);
+    EXPECT_FALSE(expected.empty()) << file;
+    EXPECT_TRUE(ReadFile(other + "/" + file) == expected) << file << " differs " << how;
+  }
+}
+
 TEST(LauncherTest, AnAgentStoppedFor5SecondsChangesNoNumber) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-launch-sigstop");
@@ -341,11 +351,7 @@ TEST(LauncherTest, AnAgentStoppedFor5SecondsChangesNoNumber) {
   ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(stopped + ".log");
   const auto summary = nlohmann::json::parse(ReadFile(stopped + "/summary.json"));
   EXPECT_GT(summary["wall_seconds"].get<double>(), 5.0) << "the stop did not fall within the run";
-  for (const char* file : {"metrics.csv", "trajectories/r1_estimate.tum", "trajectories/r2_estimate.tum"}) {
-    const std::string expected = ReadFile(reference + "/" + file);
-    EXPECT_FALSE(expected.empty()) << file;
-    EXPECT_TRUE(ReadFile(stopped + "/" + file) == expected) << file << " differs after a 5 s SIGSTOP";
-  }
+  ExpectSameNumbers(reference, stopped, "after a 5 s SIGSTOP");
 }
 
 // Discovery through the launcher's server changes who learns of whom, not what flows: the same
@@ -364,11 +370,7 @@ TEST(LauncherTest, DiscoveryThroughTheLaunchersServerChangesNoNumber) {
   ASSERT_EQ(launcher.WaitExit(seconds(300)), std::optional<int>(0)) << ReadFile(served + ".log");
   const auto summary = nlohmann::json::parse(ReadFile(served + "/summary.json"));
   EXPECT_EQ(summary.value("discovery_server", false), true);
-  for (const char* file : {"metrics.csv", "trajectories/r1_estimate.tum", "trajectories/r2_estimate.tum"}) {
-    const std::string expected = ReadFile(reference + "/" + file);
-    EXPECT_FALSE(expected.empty()) << file;
-    EXPECT_TRUE(ReadFile(served + "/" + file) == expected) << file << " differs with discovery through the server";
-  }
+  ExpectSameNumbers(reference, served, "with discovery through the server");
 }
 
 TEST(LauncherTest, SigintStopsEveryChildAndExits130) {
