@@ -49,8 +49,9 @@ for k in ("wall_seconds", "evaluator_wall_seconds", "dds_domain", "cpu_seconds",
 for r in s["robots"].values():
     # Times, and the peer traffic: with shared raw measurements a restored agent is sent again what
     # its snapshot did not hold.
-    for k in ("step_cpu_ms_median", "step_cpu_ms_p99", "latency_us_median", "latency_us_p99", "estimate_hop_us_median", "restarts",
-              "restart_comeback_s", "peer_bytes_sent_per_s", "peer_bytes_received_per_s"):
+    for k in ("step_cpu_ms_median", "step_cpu_ms_p99", "latency_us_median", "latency_us_p99", "estimate_hop_us_median",
+              "data_hop_us_median", "agent_overhead_us_median", "restarts", "restart_comeback_s",
+              "peer_bytes_sent_per_s", "peer_bytes_received_per_s"):
         r.pop(k, None)
 print(json.dumps(s, sort_keys=True))
 PY

@@ -32,6 +32,13 @@ namespace mrslam::robot_agent {
 namespace {
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
+
+// A sensor step with its DDS hop: this agent's reception less the writer's write, microseconds
+// (0: unknown).
+struct ReceivedSensorStep {
+  common::SensorStep step;
+  double hop_us = 0.0;
+};
 }  // namespace
 
 struct AgentNode::Impl {
@@ -67,7 +74,7 @@ struct AgentNode::Impl {
   std::uint32_t restored_step = 0;    // the step of the snapshot restored at the start (0: none)
   std::size_t rendezvous_logged = 0;  // rendezvous() entries logged so far
   // Sensor steps buffered by step until the step is complete, taken only from the simulator.
-  cooperation::StepSlots<common::SensorStep> sensors;
+  cooperation::StepSlots<ReceivedSensorStep> sensors;
   std::map<std::uint32_t, msg::StepClock> clock;
   cooperation::SimulatorBinding simulator;
 
@@ -106,7 +113,8 @@ struct AgentNode::Impl {
   bool Replayed(std::uint32_t step) const { return restored_step > 0 && step <= restored_step; }
 
   // Buffers a sensor step of a future or current step, or rejects it.
-  void Buffer(common::SensorStep sample, const common::WriterId& writer) {
+  void Buffer(ReceivedSensorStep in, const common::WriterId& writer) {
+    common::SensorStep& sample = in.step;
     const common::Stamp& stamp = sample.odometry.stamp;
     const std::uint32_t step = stamp.step;
     if (const auto problem = cooperation::StampProblem(stamp, agent.robot_id); !problem.empty()) {
@@ -118,7 +126,7 @@ struct AgentNode::Impl {
       Reject(cooperation::Rejection::kMalformed, fmt::format("{} malformed sensor item(s) of step {}", bad, step),
              static_cast<std::uint32_t>(bad));
     }
-    if (const auto kind = sensors.Offer(step, next_step, writer, std::move(sample))) {
+    if (const auto kind = sensors.Offer(step, next_step, writer, std::move(in))) {
       Reject(*kind, fmt::format("sensor step {} (the agent is at step {})", step, next_step));
     }
   }
@@ -126,7 +134,11 @@ struct AgentNode::Impl {
   void Drain() {
     common::WriterId writer{};
     msg::SensorStep m;
-    while (sensor_reader.TryTake(&m, &writer)) Buffer(dds::FromMsg(m), writer);
+    dds::SampleTimes times;
+    while (sensor_reader.TryTake(&m, &writer, &times)) {
+      const bool timed = times.written_ns > 0 && times.received_ns > 0;
+      Buffer({dds::FromMsg(m), timed ? static_cast<double>(times.received_ns - times.written_ns) * 1e-3 : 0.0}, writer);
+    }
     msg::StepClock c;
     while (clock_reader.TryTake(&c, &writer)) AcceptClock(c, writer);
     for (auto& [peer, from] : from_peers) DrainPeer(peer, from.get());
@@ -592,7 +604,8 @@ struct AgentNode::Impl {
     const double cpu_start_s = common::ThreadCpuSeconds();
     ApplyPeerMessages(k);
     const std::uint32_t foreign_before = counters.rejected.Of(cooperation::Rejection::kForeignWriter);
-    const common::SensorStep step = sensors.Take(k, *sim, &counters.rejected);
+    const ReceivedSensorStep taken = sensors.Take(k, *sim, &counters.rejected);
+    const common::SensorStep& step = taken.step;
     if (const auto foreign = counters.rejected.Of(cooperation::Rejection::kForeignWriter) - foreign_before;
         foreign > 0) {
       spdlog::warn("rejected (foreign-writer): {} sensor step(s) of step {} not written by the simulator", foreign, k);
@@ -619,6 +632,7 @@ struct AgentNode::Impl {
     m.peer_bytes_sent(Total(bytes_sent_to));
     m.peer_bytes_received(Total(bytes_received_from));
     m.peer_messages_late(counters.peer_messages_late);
+    m.data_hop_us(taken.hop_us);
     m.estimator_bytes(filter->EstimatorBytes() + cooperation.exchange().HeldBytes() + cooperation.streamed_bytes());
     step_times[k] = time_s;
     if (*last) m.final_trajectory_chunks(PublishFinalTrajectory(k, time_s));

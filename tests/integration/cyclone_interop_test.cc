@@ -174,6 +174,10 @@ void ExpectSameEstimate(const mrslam_msg_Estimate& c, const msg::Estimate& f) {
   EXPECT_EQ(c.step_cpu_ms, f.step_cpu_ms()) << what;
   EXPECT_EQ(c.estimator_bytes, f.estimator_bytes()) << what;
   EXPECT_EQ(c.final_trajectory_chunks, f.final_trajectory_chunks()) << what;
+  EXPECT_EQ(c.peer_bytes_sent, f.peer_bytes_sent()) << what;
+  EXPECT_EQ(c.peer_bytes_received, f.peer_bytes_received()) << what;
+  EXPECT_EQ(c.peer_messages_late, f.peer_messages_late()) << what;
+  EXPECT_EQ(c.data_hop_us, f.data_hop_us()) << what;
 }
 
 // r1 at the origin of G1 facing -x sees two landmarks behind it and r2 at (0, 3).

@@ -203,6 +203,12 @@ TEST(LauncherTest, ShortRunWritesEveryOutputWithPlausibleValues) {
     // The estimate's own hop is a part of the latency: positive, and below the whole.
     ExpectFiniteAtLeast(r, "estimate_hop_us_median", 1.0, id);
     EXPECT_LT(r["estimate_hop_us_median"].get<double>(), r["latency_us_p99"].get<double>()) << id;
+    // So is the data's hop into the agent, as the agent reports it; and the agent's overhead is
+    // the rest, so the parts' medians stay within the latency's range.
+    ExpectFiniteAtLeast(r, "data_hop_us_median", 1.0, id);
+    EXPECT_LT(r["data_hop_us_median"].get<double>(), r["latency_us_p99"].get<double>()) << id;
+    ASSERT_TRUE(r.contains("agent_overhead_us_median") && r["agent_overhead_us_median"].is_number()) << id;
+    EXPECT_LT(r["agent_overhead_us_median"].get<double>(), r["latency_us_p99"].get<double>()) << id;
     EXPECT_EQ(r.value("late_estimates", -1), 0) << id;
     EXPECT_LT(r["position_rmse_m"].get<double>(), 20.0) << id;  // 12 steps of 0.65 m: a sanity bound
     EXPECT_LT(r["heading_rmse_deg"].get<double>(), 180.0) << id;

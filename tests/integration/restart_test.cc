@@ -59,9 +59,9 @@ nlohmann::json Numbers(nlohmann::json summary) {
     summary.erase(key);
   for (auto& [id, robot] : summary["robots"].items()) {
     // The peer traffic too: a restarted agent sends again what it sent after its snapshot.
-    for (const char* key :
-         {"step_cpu_ms_median", "step_cpu_ms_p99", "latency_us_median", "latency_us_p99", "estimate_hop_us_median",
-          "restarts", "restart_comeback_s", "peer_bytes_sent_per_s", "peer_bytes_received_per_s"})
+    for (const char* key : {"step_cpu_ms_median", "step_cpu_ms_p99", "latency_us_median", "latency_us_p99",
+                            "estimate_hop_us_median", "data_hop_us_median", "agent_overhead_us_median", "restarts",
+                            "restart_comeback_s", "peer_bytes_sent_per_s", "peer_bytes_received_per_s"})
       robot.erase(key);
   }
   return summary;

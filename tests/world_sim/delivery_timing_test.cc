@@ -1,5 +1,7 @@
 #include "world_sim/evaluator/delivery_timing.h"
 
+#include <limits>
+
 #include <gtest/gtest.h>
 
 namespace mrslam::evaluator {
@@ -26,7 +28,7 @@ TEST(DeliveryTimingTest, LatencyIsReceptionAfterTheStepMinusProcessing) {
     const std::int64_t step_ns = kStart + k * kStepNs;
     const std::int64_t received = step_ns + 2'300'000 + std::int64_t{k} * 1000;
     // Written 10 us before its reception, every fourth 100 us before (median 10 us, mean 32.5 us).
-    timing.EstimateDelivered("r1", k, received - (k % 4 == 0 ? 100'000 : 10'000), received, 2.0);
+    timing.EstimateDelivered("r1", k, {received - (k % 4 == 0 ? 100'000 : 10'000), received, 2.0});
   }
   const DeliverySummary s = timing.Summary("r1");
   EXPECT_EQ(s.timed_steps, 100U);
@@ -44,7 +46,7 @@ TEST(DeliveryTimingTest, AnEstimateWrittenAfterTheNextStepsSensorDataIsLate) {
     const std::int64_t next_sensor = kStart + (k + 1) * kStepNs - 50'000;
     // Steps 3 and 7 are written 1 us after the next step's odometry; the others 1 us before.
     const std::int64_t written = (k == 3 || k == 7) ? next_sensor + 1000 : next_sensor - 1000;
-    timing.EstimateDelivered("r1", k, written, written + 100'000, 1.0);
+    timing.EstimateDelivered("r1", k, {written, written + 100'000, 1.0});
   }
   EXPECT_EQ(timing.Summary("r1").late_estimates, 2);
   EXPECT_EQ(timing.Summary("r1").late_steps, (std::vector<std::uint32_t>{3, 7}));
@@ -55,7 +57,7 @@ TEST(DeliveryTimingTest, NamesTheStepsOfTheFirstLateEstimatesOnly) {
   DeliveryTiming timing = Steps(n + 1);
   for (int k = 1; k <= n; ++k) {  // every one written after the next step's odometry
     const std::int64_t written = kStart + (k + 1) * kStepNs;
-    timing.EstimateDelivered("r1", k, written, written + 100'000, 1.0);
+    timing.EstimateDelivered("r1", k, {written, written + 100'000, 1.0});
   }
   const DeliverySummary s = timing.Summary("r1");
   EXPECT_EQ(s.late_estimates, n);
@@ -72,7 +74,7 @@ TEST(DeliveryTimingTest, SensorDataTakenAfterItsOwnStepsEstimateStillJudgesTheOn
     const std::int64_t sensor = kStart + k * kStepNs - 50'000;
     timing.StepWritten(k, kStart + k * kStepNs);
     const std::int64_t written = k == 4 ? kStart + 5 * kStepNs : sensor + 1'000'000;
-    timing.EstimateDelivered("r1", k, written, written + 100'000, 1.0);
+    timing.EstimateDelivered("r1", k, {written, written + 100'000, 1.0});
     timing.SensorWritten("r1", k, sensor);
   }
   EXPECT_EQ(timing.Summary("r1").late_estimates, 1);
@@ -84,13 +86,13 @@ TEST(DeliveryTimingTest, AnEstimateBeforeItsStepsTruthIsTimedWhenTheTruthComes) 
   DeliveryTiming timing({"r1", "r2"});
   timing.SensorWritten("r1", 1, kStart - 50'000);
   timing.SensorWritten("r2", 1, kStart - 40'000);
-  timing.EstimateDelivered("r1", 1, kStart + 900'000, kStart + 1'000'000, 0.5);
+  timing.EstimateDelivered("r1", 1, {kStart + 900'000, kStart + 1'000'000, 0.5});
   EXPECT_EQ(timing.Summary("r1").timed_steps, 0U);
   timing.StepWritten(1, kStart);
   EXPECT_EQ(timing.Summary("r1").timed_steps, 1U);
   EXPECT_NEAR(timing.Summary("r1").latency_us_median, 500.0, 1e-6);  // 1000 us less 0.5 ms
   // r2 has not reported step 1 yet: its time is still held for r2.
-  timing.EstimateDelivered("r2", 1, kStart + 1'900'000, kStart + 2'000'000, 0.25);
+  timing.EstimateDelivered("r2", 1, {kStart + 1'900'000, kStart + 2'000'000, 0.25});
   EXPECT_NEAR(timing.Summary("r2").latency_us_median, 1750.0, 1e-6);
 }
 
@@ -100,8 +102,8 @@ TEST(DeliveryTimingTest, ARobotWhoseDataComeLaterInTheStepIsTimedFromItsData) {
   timing.StepWritten(1, kStart);
   timing.SensorWritten("r1", 1, kStart + 20'000);
   timing.SensorWritten("r2", 1, kStart + 50'000'000);
-  timing.EstimateDelivered("r1", 1, kStart + 1'900'000, kStart + 2'000'000, 1.5);
-  timing.EstimateDelivered("r2", 1, kStart + 51'900'000, kStart + 52'000'000, 1.5);
+  timing.EstimateDelivered("r1", 1, {kStart + 1'900'000, kStart + 2'000'000, 1.5});
+  timing.EstimateDelivered("r2", 1, {kStart + 51'900'000, kStart + 52'000'000, 1.5});
   EXPECT_NEAR(timing.Summary("r1").latency_us_median, 480.0, 1e-6);  // 2000 - 20 - 1500 us
   EXPECT_NEAR(timing.Summary("r2").latency_us_median, 500.0, 1e-6);  // 52000 - 50000 - 1500 us
 }
@@ -113,7 +115,7 @@ TEST(DeliveryTimingTest, AnEstimateTakenBeforeItsOwnDataIsTimedWhenTheDataCome) 
   for (int k = 1; k <= 5; ++k) {
     const std::int64_t step_ns = kStart + k * kStepNs;
     timing.StepWritten(k, step_ns);
-    for (const char* id : {"r1", "r2"}) timing.EstimateDelivered(id, k, step_ns + 900'000, step_ns + 1'000'000, 0.6);
+    for (const char* id : {"r1", "r2"}) timing.EstimateDelivered(id, k, {step_ns + 900'000, step_ns + 1'000'000, 0.6});
     timing.SensorWritten("r1", k, step_ns - 30'000);
     timing.SensorWritten("r2", k, step_ns + 100'000);
   }
@@ -123,12 +125,42 @@ TEST(DeliveryTimingTest, AnEstimateTakenBeforeItsOwnDataIsTimedWhenTheDataCome) 
   EXPECT_LE(timing.Held(), 3U);  // step 5's truth and the estimates awaiting step 6's odometry
 }
 
+TEST(DeliveryTimingTest, TheLatencySplitsIntoBothHopsAndTheAgentsOverhead) {
+  DeliveryTiming timing = Steps(9);
+  // Step k: the data's hop 100 + 10 k us, the estimate's 50 us, latency 400 + 20 k us (its data
+  // written 50 us before the step's truth: timed from the truth), so the agent's overhead is
+  // 250 + 10 k us. Step 9 reports no data hop (an older agent): timed, but not split.
+  for (int k = 1; k <= 9; ++k) {
+    const std::int64_t received = kStart + k * kStepNs + 1'400'000 + std::int64_t{k} * 20'000;
+    const double data_hop_us = k == 9 ? 0.0 : 100.0 + 10.0 * k;
+    timing.EstimateDelivered("r1", k, {received - 50'000, received, 1.0, data_hop_us});
+  }
+  const DeliverySummary s = timing.Summary("r1");
+  EXPECT_EQ(s.timed_steps, 9U);
+  EXPECT_NEAR(s.latency_us_median, 500.0, 1e-6);   // k = 5 of 1..9
+  EXPECT_NEAR(s.data_hop_us_median, 145.0, 1e-6);  // k = 1..8: 110..180
+  EXPECT_NEAR(s.estimate_hop_us_median, 50.0, 1e-6);
+  EXPECT_NEAR(s.agent_overhead_us_median, 295.0, 1e-6);  // k = 1..8: 260..330
+}
+
+TEST(DeliveryTimingTest, ANonFiniteProcessingTimeOrDataHopIsLeftOut) {
+  DeliveryTiming timing = Steps(2);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  timing.EstimateDelivered("r1", 1, {kStart + kStepNs, kStart + kStepNs + 500'000, nan, 100.0});
+  timing.EstimateDelivered("r1", 2, {kStart + 2 * kStepNs, kStart + 2 * kStepNs + 500'000, 0.1, nan});
+  const DeliverySummary s = timing.Summary("r1");
+  EXPECT_EQ(s.timed_steps, 1U);  // step 2 only
+  EXPECT_NEAR(s.latency_us_median, 400.0, 1e-6);
+  EXPECT_NEAR(s.data_hop_us_median, 100.0, 1e-6);  // step 1's: its hop is known
+  EXPECT_EQ(s.agent_overhead_us_median, 0.0);      // neither step has every part
+}
+
 TEST(DeliveryTimingTest, UnknownTimesLeaveTheStepOut) {
   DeliveryTiming timing = Steps(3);
   timing.StepWritten(4, 0);  // unknown: not recorded
-  timing.EstimateDelivered("r1", 1, 0, kStart + kStepNs + 500'000, 0.2);
-  timing.EstimateDelivered("r1", 2, 0, 0, 0.2);
-  timing.EstimateDelivered("r1", 4, kStart, kStart + 5 * kStepNs, 0.2);
+  timing.EstimateDelivered("r1", 1, {0, kStart + kStepNs + 500'000, 0.2});
+  timing.EstimateDelivered("r1", 2, {0, 0, 0.2});
+  timing.EstimateDelivered("r1", 4, {kStart, kStart + 5 * kStepNs, 0.2});
   const DeliverySummary s = timing.Summary("r1");
   EXPECT_EQ(s.timed_steps, 1U);  // only step 1 has both a step time and a reception
   EXPECT_NEAR(s.latency_us_median, 300.0, 1e-6);

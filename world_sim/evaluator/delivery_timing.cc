@@ -10,8 +10,8 @@ namespace mrslam::evaluator {
 
 namespace {
 // Erases the times of steps before `step` that have no counterpart in `partner`.
-void EraseUnpaired(std::map<std::uint32_t, std::int64_t>* times, const std::map<std::uint32_t, std::int64_t>& partner,
-                   std::uint32_t step) {
+template <typename Times, typename Partner>
+void EraseUnpaired(Times* times, const Partner& partner, std::uint32_t step) {
   for (auto it = times->begin(); it != times->end() && it->first < step;) {
     it = partner.count(it->first) > 0 ? std::next(it) : times->erase(it);
   }
@@ -39,26 +39,31 @@ void DeliveryTiming::SensorWritten(const std::string& robot_id, std::uint32_t st
   if (step > 0) JudgeLate(&robot, step - 1);
   if (robot.any_estimate && step <= robot.newest_estimate + 1) robot.sensor_written.erase(step);
   // The robot's data come in step order: an estimate still waiting for an earlier step's lost them.
-  EraseUnpaired(&robot.arrival_ns, robot.data_written, step);
-  if (!robot.any_estimate || step > robot.newest_estimate || robot.arrival_ns.count(step) > 0) {
+  EraseUnpaired(&robot.arrival, robot.data_written, step);
+  if (!robot.any_estimate || step > robot.newest_estimate || robot.arrival.count(step) > 0) {
     robot.data_written[step] = written_ns;
     TimeStep(&robot, step);
   }
   Prune();
 }
 
-void DeliveryTiming::EstimateDelivered(const std::string& robot_id, std::uint32_t step, std::int64_t written_ns,
-                                       std::int64_t received_ns, double processing_ms) {
+void DeliveryTiming::EstimateDelivered(const std::string& robot_id, std::uint32_t step, const EstimateTiming& times) {
   RobotTiming& robot = robots_.at(robot_id);
-  if (received_ns > 0 && written_ns > 0)
-    robot.estimate_hop_us.push_back(static_cast<double>(received_ns - written_ns) * 1e-3);
-  if (received_ns > 0) {
-    // Nanoseconds since the epoch exceed a double's exact integers: differences first.
-    robot.arrival_ns[step] = received_ns - std::llround(processing_ms * 1e6);
+  // Nanoseconds since the epoch exceed a double's exact integers: differences first.
+  double hops_us = 0.0;
+  const bool data_hop = std::isfinite(times.data_hop_us) && times.data_hop_us > 0.0;
+  if (data_hop) robot.data_hop_us.push_back(times.data_hop_us);
+  if (times.received_ns > 0 && times.written_ns > 0) {
+    const double hop_us = static_cast<double>(times.received_ns - times.written_ns) * 1e-3;
+    robot.estimate_hop_us.push_back(hop_us);
+    if (data_hop) hops_us = hop_us + times.data_hop_us;
+  }
+  if (times.received_ns > 0 && std::isfinite(times.processing_ms)) {
+    robot.arrival[step] = {times.received_ns - std::llround(times.processing_ms * 1e6), hops_us};
     TimeStep(&robot, step);
   }
-  if (written_ns > 0) {
-    robot.estimate_written[step] = written_ns;
+  if (times.written_ns > 0) {
+    robot.estimate_written[step] = times.written_ns;
     JudgeLate(&robot, step);
   }
   robot.any_estimate = true;
@@ -66,18 +71,20 @@ void DeliveryTiming::EstimateDelivered(const std::string& robot_id, std::uint32_
   // Sensor data of steps up to this one can no longer meet an earlier estimate, nor the data of
   // earlier steps their own estimate (in or lost).
   robot.sensor_written.erase(robot.sensor_written.begin(), robot.sensor_written.upper_bound(step));
-  EraseUnpaired(&robot.data_written, robot.arrival_ns, step);
+  EraseUnpaired(&robot.data_written, robot.arrival, step);
   Prune();
 }
 
 void DeliveryTiming::TimeStep(RobotTiming* robot, std::uint32_t step) {
-  const auto arrival = robot->arrival_ns.find(step);
+  const auto arrival = robot->arrival.find(step);
   const auto data = robot->data_written.find(step);
   const auto written = steps_.find(step);
-  if (arrival == robot->arrival_ns.end() || data == robot->data_written.end() || written == steps_.end()) return;
+  if (arrival == robot->arrival.end() || data == robot->data_written.end() || written == steps_.end()) return;
   const std::int64_t from = std::max(written->second, data->second);
-  robot->latency_us.push_back(static_cast<double>(arrival->second - from) * 1e-3);
-  robot->arrival_ns.erase(arrival);
+  const double latency_us = static_cast<double>(arrival->second.ns - from) * 1e-3;
+  robot->latency_us.push_back(latency_us);
+  if (arrival->second.hops_us > 0.0) robot->overhead_us.push_back(latency_us - arrival->second.hops_us);
+  robot->arrival.erase(arrival);
   robot->data_written.erase(data);
 }
 
@@ -99,7 +106,7 @@ void DeliveryTiming::Prune() {
   bool first = true;
   for (const auto& [id, robot] : robots_) {
     std::uint32_t past = robot.any_estimate ? robot.newest_estimate + 1 : 0;
-    if (!robot.arrival_ns.empty()) past = std::min(past, robot.arrival_ns.begin()->first);
+    if (!robot.arrival.empty()) past = std::min(past, robot.arrival.begin()->first);
     all_past = first ? past : std::min(all_past, past);
     first = false;
   }
@@ -118,14 +125,15 @@ DeliverySummary DeliveryTiming::Summary(const std::string& robot_id) const {
     out.latency_us_p99 = Percentile(robot->second.latency_us, 99.0);
   }
   if (!robot->second.estimate_hop_us.empty()) out.estimate_hop_us_median = Median(robot->second.estimate_hop_us);
+  if (!robot->second.data_hop_us.empty()) out.data_hop_us_median = Median(robot->second.data_hop_us);
+  if (!robot->second.overhead_us.empty()) out.agent_overhead_us_median = Median(robot->second.overhead_us);
   return out;
 }
 
 std::size_t DeliveryTiming::Held() const {
   std::size_t n = steps_.size();
   for (const auto& [id, robot] : robots_) {
-    n += robot.sensor_written.size() + robot.estimate_written.size() + robot.arrival_ns.size() +
-         robot.data_written.size();
+    n += robot.sensor_written.size() + robot.estimate_written.size() + robot.arrival.size() + robot.data_written.size();
   }
   return n;
 }

@@ -40,6 +40,7 @@ RobotEstimate FromEstimateMsg(const msg::Estimate& m) {
   e.peer_bytes_sent = m.peer_bytes_sent();
   e.peer_bytes_received = m.peer_bytes_received();
   e.peer_messages_late = m.peer_messages_late();
+  e.data_hop_us = m.data_hop_us();
   e.estimator_bytes = m.estimator_bytes();
   e.final_trajectory_chunks = m.final_trajectory_chunks();
   for (const auto& r : m.rendezvous()) e.rendezvous.push_back({r.peer_id(), r.step(), dds::FromMsg(r.t_self_peer())});

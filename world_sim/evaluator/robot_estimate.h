@@ -57,6 +57,8 @@ struct RobotEstimate {
   // 0 unknown): DeliveryTiming.
   std::int64_t written_ns = 0;
   std::int64_t received_ns = 0;
+  // The step's sensor step: received by the agent less written by world_sim, us (0 unknown).
+  double data_hop_us = 0.0;
   // Last step: chunks of the agent's final trajectory to come (0: its online path is final).
   std::uint32_t final_trajectory_chunks = 0;
 };

@@ -119,7 +119,8 @@ void RunEvaluator::AddEstimate(const std::string& robot_id, const RobotEstimate&
     robot.last_step_in = true;
     robot.final_chunks_announced = estimate.final_trajectory_chunks;
   }
-  timing_.EstimateDelivered(robot_id, estimate.step, estimate.written_ns, estimate.received_ns, estimate.step_cpu_ms);
+  timing_.EstimateDelivered(robot_id, estimate.step,
+                            {estimate.written_ns, estimate.received_ns, estimate.step_cpu_ms, estimate.data_hop_us});
   Advance(false);
 }
 
@@ -358,6 +359,8 @@ nlohmann::json RunEvaluator::RobotSummaryJson(const std::string& id, const Robot
   r["latency_us_median"] = delivery.latency_us_median;
   r["latency_us_p99"] = delivery.latency_us_p99;
   r["estimate_hop_us_median"] = delivery.estimate_hop_us_median;
+  r["data_hop_us_median"] = delivery.data_hop_us_median;
+  r["agent_overhead_us_median"] = delivery.agent_overhead_us_median;
   r["late_estimates"] = delivery.late_estimates;
   r["late_estimate_steps"] = delivery.late_steps;
   r["frames_known"] = robot.last ? robot.last->frames_known : std::vector<std::string>{};
