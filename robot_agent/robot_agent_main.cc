@@ -9,6 +9,7 @@
 #include "common/config/agent_options_projection.h"
 #include "common/config/scenario_flags.h"
 #include "common/dds/participant.h"
+#include "common/dds/process_exit.h"
 #include "common/logging.h"
 #include "robot_agent/factory/filter_factory.h"
 #include "robot_agent/node/agent_node.h"
@@ -97,8 +98,8 @@ int Run(AgentFlags flags) {
 int main(int argc, char** argv) {
   using namespace mrslam;
   robot_agent::AgentFlags flags;
-  return common::RunMain(
+  mrslam::dds::ExitProcess(common::RunMain(
       "robot_agent", "mrslam robot agent: runs one robot's SLAM filter on its own sensor topic", argc, argv,
       [&](CLI::App& app) { robot_agent::AddFlags(app, &flags); },
-      [&](const CLI::App&) { return robot_agent::Run(flags); });
+      [&](const CLI::App&) { return robot_agent::Run(flags); }));
 }

@@ -10,6 +10,7 @@
 #include "common/app.h"
 #include "common/config/scenario_flags.h"
 #include "common/dds/participant.h"
+#include "common/dds/process_exit.h"
 #include "common/logging.h"
 #include "world_sim/node/sim_node.h"
 
@@ -73,7 +74,8 @@ int Run(SimFlags flags) {
 int main(int argc, char** argv) {
   using namespace mrslam;
   world_sim::SimFlags flags;
-  return common::RunMain(
+  mrslam::dds::ExitProcess(common::RunMain(
       "world_sim", "mrslam world simulator: publishes each robot's lidar, IMU and odometry, and the truth", argc, argv,
-      [&](CLI::App& app) { world_sim::AddFlags(app, &flags); }, [&](const CLI::App&) { return world_sim::Run(flags); });
+      [&](CLI::App& app) { world_sim::AddFlags(app, &flags); },
+      [&](const CLI::App&) { return world_sim::Run(flags); }));
 }

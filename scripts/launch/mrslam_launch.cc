@@ -26,6 +26,7 @@
 #include "common/cpu_clock.h"
 #include "common/dds/discovery_server.h"
 #include "common/dds/participant.h"
+#include "common/dds/process_exit.h"
 #include "common/progress_line.h"
 #include "common/seed_range.h"
 #include "scripts/launch/comeback_watch.h"
@@ -632,7 +633,7 @@ void AddFlags(CLI::App& app, LaunchFlags* flags) {
 int main(int argc, char** argv) {
   using namespace mrslam;
   launch::LaunchFlags flags;
-  return common::RunMain(
+  mrslam::dds::ExitProcess(common::RunMain(
       launch::kName,
       "mrslam launcher: runs a scenario end to end (evaluator, world_sim, one robot_agent per robot) as separate "
       "processes on a free DDS domain, then prints a summary and writes plots",
@@ -640,5 +641,5 @@ int main(int argc, char** argv) {
       [&](const CLI::App& app) {
         flags.log_level_given = app.get_option("--log-level")->count() > 0;
         return launch::Main(flags);
-      });
+      }));
 }

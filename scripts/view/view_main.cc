@@ -10,6 +10,7 @@
 #include "common/app.h"
 #include "common/config/scenario_flags.h"
 #include "common/dds/participant.h"
+#include "common/dds/process_exit.h"
 #include "scripts/view/frame_hub.h"
 #include "scripts/view/live_feed.h"
 #include "scripts/view/replay_run.h"
@@ -90,10 +91,10 @@ void AddFlags(CLI::App& app, ViewFlags* flags) {
 int main(int argc, char** argv) {
   using namespace mrslam;
   view::ViewFlags flags;
-  return common::RunMain(
+  mrslam::dds::ExitProcess(common::RunMain(
       view::kName,
       "mrslam viewer: a live view of a run in the browser (Server-Sent Events from DDS), or --run DIR to replay a "
       "finished run",
       argc, argv, [&](CLI::App& app) { view::AddFlags(app, &flags); },
-      [&](const CLI::App&) { return flags.run_dir.empty() ? view::Live(flags) : view::Replay(flags); });
+      [&](const CLI::App&) { return flags.run_dir.empty() ? view::Live(flags) : view::Replay(flags); }));
 }

@@ -14,6 +14,7 @@
 #include "common/config/scenario_flags.h"
 #include "common/dds/msg_conversion.h"
 #include "common/dds/participant.h"
+#include "common/dds/process_exit.h"
 #include "common/logging.h"
 #include "mrslamPubSubTypes.h"
 #include "world_sim/evaluator/estimate_msg.h"
@@ -150,13 +151,14 @@ int main(int argc, char** argv) {
     common::AddCommonFlags(app, &flags);
     app.add_option("--out", out_dir, "Output folder")->required();
   };
-  return common::RunMain("evaluator", "mrslam evaluator: scores every robot's estimates against the ground truth", argc,
-                         argv, add_flags, [&](const CLI::App&) {
-                           common::SetupLogging("evaluator", flags.log_level);
-                           const auto scenario = common::LoadScenarioFromFlags(flags);
-                           const int domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
-                           const mrslam::dds::ParticipantOptions dds_options{domain, "evaluator", flags.shared_memory,
-                                                                             flags.security_dir, "evaluator"};
-                           return evaluator::Evaluate(scenario, dds_options, out_dir, common::InstallStopHandler());
-                         });
+  mrslam::dds::ExitProcess(
+      common::RunMain("evaluator", "mrslam evaluator: scores every robot's estimates against the ground truth", argc,
+                      argv, add_flags, [&](const CLI::App&) {
+                        common::SetupLogging("evaluator", flags.log_level);
+                        const auto scenario = common::LoadScenarioFromFlags(flags);
+                        const int domain = mrslam::dds::ResolveDomain(scenario.run.domain, flags.domain);
+                        const mrslam::dds::ParticipantOptions dds_options{domain, "evaluator", flags.shared_memory,
+                                                                          flags.security_dir, "evaluator"};
+                        return evaluator::Evaluate(scenario, dds_options, out_dir, common::InstallStopHandler());
+                      }));
 }
