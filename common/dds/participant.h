@@ -200,6 +200,11 @@ class Notifier {
 struct SampleTimes {
   std::int64_t written_ns = 0;
   std::int64_t received_ns = 0;
+
+  // The sample's DDS hop, received less written, in microseconds; 0 when either is unknown.
+  double HopUs() const {
+    return written_ns > 0 && received_ns > 0 ? static_cast<double>(received_ns - written_ns) * 1e-3 : 0.0;
+  }
 };
 
 // A typed reader that queues every valid sample as it arrives (listener thread) for the owner

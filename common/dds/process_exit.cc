@@ -21,7 +21,6 @@ void ExitProcess(int code) {
   spdlog::shutdown();
   eprosima::fastdds::dds::Log::Flush();
   std::cout.flush();
-  std::cerr.flush();
   std::fflush(nullptr);
 #ifdef MRSLAM_EXIT_WITH_DESTRUCTORS
   std::exit(code);

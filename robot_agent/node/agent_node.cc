@@ -135,10 +135,7 @@ struct AgentNode::Impl {
     common::WriterId writer{};
     msg::SensorStep m;
     dds::SampleTimes times;
-    while (sensor_reader.TryTake(&m, &writer, &times)) {
-      const bool timed = times.written_ns > 0 && times.received_ns > 0;
-      Buffer({dds::FromMsg(m), timed ? static_cast<double>(times.received_ns - times.written_ns) * 1e-3 : 0.0}, writer);
-    }
+    while (sensor_reader.TryTake(&m, &writer, &times)) Buffer({dds::FromMsg(m), times.HopUs()}, writer);
     msg::StepClock c;
     while (clock_reader.TryTake(&c, &writer)) AcceptClock(c, writer);
     for (auto& [peer, from] : from_peers) DrainPeer(peer, from.get());

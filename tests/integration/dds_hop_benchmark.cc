@@ -57,8 +57,6 @@ struct Side {
   dds::Reader<Type> reader;
 };
 
-double HopUs(const dds::SampleTimes& times) { return static_cast<double>(times.received_ns - times.written_ns) / 1e3; }
-
 // The echoing child: sends every sample back, its hop in (microseconds) carried in the echo's
 // step_cpu_ms field, until none comes for 5 s.
 int Echo(int domain) {
@@ -66,7 +64,7 @@ int Echo(int domain) {
   msg::Estimate m;
   dds::SampleTimes times;
   while (side.reader.Take(&m, milliseconds(5000), nullptr, &times)) {
-    m.step_cpu_ms(HopUs(times));
+    m.step_cpu_ms(times.HopUs());
     side.writer.Write(m);
   }
   return 0;
@@ -90,7 +88,7 @@ int Measure(const Flags& flags) {
       }
       trips.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
       hops.push_back(echo.step_cpu_ms());
-      backs.push_back(HopUs(times));
+      backs.push_back(times.HopUs());
     }
     std::printf("%10d %16.0f %16.0f %16.0f\n", gap, evaluator::Median(hops), evaluator::Median(backs),
                 evaluator::Median(trips));

@@ -325,8 +325,6 @@ TEST(LauncherTest, AKilledAgentUnderShmLeavesNothingInDevShm) {
   std::filesystem::remove(out + ".log");
 }
 
-// An agent stopped (SIGSTOP) for 5 s in lockstep, less than run.ack_timeout_s, only delays the
-// run: its numbers are byte for byte those of the same run without the stop.
 // The two-robot runs in reference and other wrote the same metrics.csv and estimate trajectories
 // (and not empty ones); `how` says what was different about other.
 void ExpectSameNumbers(const std::string& reference, const std::string& other, const std::string& how) {
@@ -337,6 +335,8 @@ void ExpectSameNumbers(const std::string& reference, const std::string& other, c
   }
 }
 
+// An agent stopped (SIGSTOP) for 5 s in lockstep, less than run.ack_timeout_s, only delays the
+// run: its numbers are byte for byte those of the same run without the stop.
 TEST(LauncherTest, AnAgentStoppedFor5SecondsChangesNoNumber) {
   unsetenv("MRSLAM_DOMAIN");
   const testing::TempDir temp_dir("mrslam-launch-sigstop");
